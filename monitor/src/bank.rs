@@ -1,0 +1,355 @@
+//! The bank: one EKF per leak hypothesis, stepped on every sample.
+//!
+//! Every filter carries the six plant states and two valve nuisance states
+//! (the flow-gain deviations of the two spool directions, random walks: the
+//! valve's real coefficients are never known to better than a few percent,
+//! and that alone would masquerade as a leak). Each leak hypothesis adds its leak
+//! coefficient(s) as slowly varying (random-walk) states, so a filter does
+//! not assume a leak size: it estimates it. The healthy filter has none.
+//!
+//! State layout: `[x_p, ẋ_p, x_v, ẋ_v, p3, p4, gain_ext, gain_ret, θ…]`.
+//! Per filter and step the bank reports innovations, the normalised
+//! innovation squared (NIS) and the Gaussian log-likelihood, from which
+//! the decision layer builds its evidence.
+
+use crate::ekf::{Ekf, EkfError};
+use crate::hypothesis::Hypothesis;
+use crate::model::{
+    Eval, Inputs, Leaks, Nuisance, Plant, Step, NX, P3, P4, P_REF, VP, VV, V_REF, XP, XV, X_REF,
+};
+use crate::real::Real;
+use crate::valve::SpoolStep;
+use nalgebra::{SMatrix, SVector};
+
+/// Number of measurements per sample (x_p, p3, p4).
+pub const NZ: usize = 3;
+/// Index of the extend-direction flow-gain nuisance state.
+pub const GAIN_EXT: usize = NX;
+/// Index of the retract-direction flow-gain nuisance state.
+pub const GAIN_RET: usize = NX + 1;
+/// States before the leak coefficients (plant + nuisance).
+pub const NB: usize = NX + 2;
+const MEASURED: [usize; NZ] = [XP, P3, P4];
+
+/// One sample's measurements in scaled filter units (see `model`), with
+/// their noise variances.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Measurement<T> {
+    /// x_p / 0.1 m, p3 / 100 bar, p4 / 100 bar.
+    pub z: [T; NZ],
+    /// Noise variances, same units squared (before lag inflation).
+    pub r: [T; NZ],
+}
+
+/// What one filter did on one sample.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct FilterOutput<T> {
+    /// Innovations (measurement − prediction), scaled units.
+    pub innovation: [T; NZ],
+    /// Normalised innovation squared Σν²/s (χ² with 3 dof if consistent).
+    pub nis: T,
+    /// Gaussian log-likelihood of this sample's measurements.
+    pub log_likelihood: T,
+    /// Internal leak coefficient estimate, l/min per 10 bar (0 if absent).
+    pub leak_internal: T,
+    /// External leak coefficient estimate, l/min per 10 bar (0 if absent).
+    pub leak_external: T,
+    /// Their standard deviations (0 if absent).
+    pub leak_internal_sd: T,
+    /// See `leak_internal_sd`.
+    pub leak_external_sd: T,
+    /// Internal leak flow at the current pressures, l/min.
+    pub flow_internal_lpm: T,
+    /// External leak flow at the current pressures, l/min.
+    pub flow_external_lpm: T,
+    /// 1σ of the internal leak flow, l/min.
+    pub flow_internal_sd_lpm: T,
+    /// 1σ of the external leak flow, l/min.
+    pub flow_external_sd_lpm: T,
+    /// Valve flow-gain deviation estimates (extend, retract), relative
+    /// (0.05 = 5 % more flow than parameterised).
+    pub valve_gain: [T; 2],
+    /// Model acceleration |ẍ_p| at the start of the step, scaled (1 = 1 m/s²).
+    pub accel: T,
+    /// Largest model pressure rate at the start of the step, bar/s.
+    pub pressure_rate_bar_s: T,
+    /// Metering flow through the valve (piston side) at the start of the
+    /// step, l/min (magnitude).
+    pub valve_flow_lpm: T,
+}
+
+/// Per-step settings shared by the filters.
+#[derive(Clone, Debug)]
+pub struct StepContext<T> {
+    /// Inputs held over the step.
+    pub inputs: Inputs<T>,
+    /// The prediction step (length, substeps, spool map per substep).
+    pub step: Step<T>,
+    /// Spool map for the whole step (covariance).
+    pub spool_dt: SpoolStep<T>,
+    /// Pressure-transmitter lag, s (inflates pressure noise by (τ·ṗ)²).
+    pub pressure_lag_s: T,
+    /// Learning weight ∈ [0, 1] of the valve-nuisance and leak states this
+    /// sample (0 during transients).
+    pub learning: T,
+}
+
+/// Process-noise intensities per scaled state, per second.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ProcessNoise<T> {
+    /// Position, velocity, spool, spool rate, p3, p4, gain_ext, gain_ret.
+    pub base: [T; NB],
+    /// Leak coefficient random walk.
+    pub leak: T,
+}
+
+/// One hypothesis' filter: plant states plus `N − 6` leak coefficients.
+#[derive(Clone, Debug)]
+pub struct HypothesisFilter<T: Real, const N: usize> {
+    /// Which hypothesis.
+    pub hypothesis: Hypothesis,
+    /// Its estimate.
+    pub ekf: Ekf<T, N>,
+}
+
+impl<T: Real, const N: usize> HypothesisFilter<T, N> {
+    /// A filter for `hypothesis` started at plant state `s0`, nuisance and
+    /// leaks at zero.
+    pub fn new(hypothesis: Hypothesis, s0: &[T; NX], p0_base: &[T; NB], leak_prior_sd: T) -> Self {
+        debug_assert!(
+            hypothesis.states() == N,
+            "state size does not match the hypothesis"
+        );
+        let mut x = SVector::<T, N>::zeros();
+        let mut p0 = SVector::<T, N>::zeros();
+        for i in 0..NX {
+            x[i] = s0[i];
+        }
+        for i in 0..NB {
+            p0[i] = p0_base[i];
+        }
+        for i in NB..N {
+            p0[i] = leak_prior_sd * leak_prior_sd;
+        }
+        Self {
+            hypothesis,
+            ekf: Ekf::new(x, &p0),
+        }
+    }
+
+    /// The valve nuisance estimates in the current state.
+    pub fn nuisance(&self) -> Nuisance<T> {
+        Nuisance {
+            gain_extend: self.ekf.x[GAIN_EXT],
+            gain_retract: self.ekf.x[GAIN_RET],
+        }
+    }
+
+    /// The leak coefficients in the current state.
+    pub fn leaks(&self) -> Leaks<T> {
+        Leaks {
+            internal: self
+                .hypothesis
+                .internal_index()
+                .map_or(T::ZERO, |i| self.ekf.x[i]),
+            external: self
+                .hypothesis
+                .external_index()
+                .map_or(T::ZERO, |i| self.ekf.x[i]),
+        }
+    }
+
+    /// Predict over one step and update with `m`.
+    pub fn step(
+        &mut self,
+        plant: &Plant<T>,
+        ctx: &StepContext<T>,
+        noise: &ProcessNoise<T>,
+        m: &Measurement<T>,
+    ) -> Result<FilterOutput<T>, EkfError> {
+        let leaks = self.leaks();
+        let nuis = self.nuisance();
+        let mut s = [T::ZERO; NX];
+        for (i, v) in s.iter_mut().enumerate() {
+            *v = self.ekf.x[i];
+        }
+        let e = plant.advance(&mut s, &ctx.inputs, nuis, leaks, &ctx.step);
+        for (i, v) in s.iter().enumerate() {
+            self.ekf.x[i] = *v;
+        }
+        let phi = self.transition(&e, ctx.step.dt, &ctx.spool_dt);
+        let mut q = SVector::<T, N>::zeros();
+        for i in 0..NB {
+            q[i] = noise.base[i] * ctx.step.dt;
+        }
+        for i in NB..N {
+            q[i] = noise.leak * ctx.step.dt;
+        }
+        self.ekf.predict_covariance(&phi, &q)?;
+
+        let mut out = FilterOutput::default();
+        let mut log_det = T::ONE;
+        for (k, &j) in MEASURED.iter().enumerate() {
+            let lag = if j == XP {
+                T::ZERO
+            } else {
+                ctx.pressure_lag_s * e.f[j]
+            };
+            let r = m.r[k] + lag * lag;
+            let u = self
+                .ekf
+                .update_state_weighted(j, m.z[k], r, k as u8, NX, ctx.learning)?;
+            out.innovation[k] = u.innovation;
+            out.nis += u.innovation * u.innovation / u.variance;
+            log_det *= u.variance;
+        }
+        // ln N(ν; 0, S) = −½·(νᵀS⁻¹ν + ln det S + 3·ln 2π).
+        out.log_likelihood =
+            T::c(-0.5) * (out.nis + log_det.ln() + T::c(3.0 * 1.837_877_066_409_345_5));
+        out.accel = (e.f[VP] * T::c(V_REF)).abs();
+        out.pressure_rate_bar_s =
+            e.f[P3].abs().max(e.f[P4].abs()) * T::c(P_REF / crate::model::BAR);
+        out.valve_flow_lpm = e.q_valve_a.abs() * T::c(crate::model::LPM_PER_M3S);
+        let gref = T::c(crate::model::GAIN_REF);
+        out.valve_gain = [self.ekf.x[GAIN_EXT] * gref, self.ekf.x[GAIN_RET] * gref];
+        if let Some(i) = self.hypothesis.internal_index() {
+            out.leak_internal = self.ekf.x[i];
+            out.leak_internal_sd = self.ekf.p[(i, i)].max(T::ZERO).sqrt();
+        }
+        if let Some(i) = self.hypothesis.external_index() {
+            out.leak_external = self.ekf.x[i];
+            out.leak_external_sd = self.ekf.p[(i, i)].max(T::ZERO).sqrt();
+        }
+        // Leak flow magnitude at the updated pressures: θ·|Δp| / 10 bar (a
+        // seal leaks whichever way the pressure difference pushes; a
+        // negative θ is an estimate below the healthy baseline).
+        let per_10bar = T::c(P_REF / 1.0e6);
+        let dp_int = (self.ekf.x[P3] - self.ekf.x[P4]).abs() * per_10bar;
+        let dp_ext = (self.ekf.x[P4] - ctx.inputs.p_tank_pa / T::c(P_REF)).abs() * per_10bar;
+        out.flow_internal_lpm = out.leak_internal * dp_int;
+        out.flow_external_lpm = out.leak_external * dp_ext;
+        out.flow_internal_sd_lpm = out.leak_internal_sd * dp_int;
+        out.flow_external_sd_lpm = out.leak_external_sd * dp_ext;
+        Ok(out)
+    }
+
+    /// The discrete transition Jacobian Φ of `Plant::advance` over `dt`,
+    /// linearised at the start of the step: the explicit part of each row
+    /// divided by (1 − dt·d) where the scheme treats its diagonal `d`
+    /// implicitly; the spool block from its exact map; position from the
+    /// updated velocity (symplectic Euler).
+    pub fn transition(&self, e: &Eval<T>, dt: T, spool: &SpoolStep<T>) -> SMatrix<T, N, N> {
+        let j = &e.jac;
+        let li = self.hypothesis.internal_index();
+        let le = self.hypothesis.external_index();
+        let mut phi = SMatrix::<T, N, N>::identity();
+        let stiff = crate::model::stiff::<T>;
+        let g = dt / (T::ONE - dt * stiff(j.v_v));
+        phi[(VP, XP)] = g * j.v_x;
+        phi[(VP, VP)] = T::ONE + g * j.v_v;
+        phi[(VP, P3)] = g * j.v_p3;
+        phi[(VP, P4)] = g * j.v_p4;
+        let ratio = dt * T::c(V_REF / X_REF);
+        for c in [XP, VP, P3, P4] {
+            let v = phi[(VP, c)];
+            phi[(XP, c)] += ratio * v;
+        }
+        phi[(XV, XV)] = spool.phi[0][0];
+        phi[(XV, VV)] = spool.phi[0][1];
+        phi[(VV, XV)] = spool.phi[1][0];
+        phi[(VV, VV)] = spool.phi[1][1];
+        let g3 = dt / (T::ONE - dt * stiff(j.p3_p3));
+        phi[(P3, XP)] = g3 * j.p3_x;
+        phi[(P3, VP)] = g3 * j.p3_v;
+        phi[(P3, XV)] = g3 * j.p3_xv;
+        phi[(P3, P3)] = T::ONE + g3 * j.p3_p3;
+        phi[(P3, P4)] = g3 * j.p3_p4;
+        let g4 = dt / (T::ONE - dt * stiff(j.p4_p4));
+        phi[(P4, XP)] = g4 * j.p4_x;
+        phi[(P4, VP)] = g4 * j.p4_v;
+        phi[(P4, XV)] = g4 * j.p4_xv;
+        phi[(P4, P3)] = g4 * j.p4_p3;
+        phi[(P4, P4)] = T::ONE + g4 * j.p4_p4;
+        phi[(P3, GAIN_EXT)] = g3 * j.p3_ge;
+        phi[(P4, GAIN_EXT)] = g4 * j.p4_ge;
+        phi[(P3, GAIN_RET)] = g3 * j.p3_gr;
+        phi[(P4, GAIN_RET)] = g4 * j.p4_gr;
+        if let Some(i) = li {
+            phi[(P3, i)] = g3 * j.p3_li;
+            phi[(P4, i)] = g4 * j.p4_li;
+        }
+        if let Some(i) = le {
+            phi[(P4, i)] = g4 * j.p4_le;
+        }
+        phi
+    }
+}
+
+/// The four filters.
+#[derive(Clone, Debug)]
+pub struct Bank<T: Real> {
+    /// No leak.
+    pub healthy: HypothesisFilter<T, { NB }>,
+    /// Internal leak.
+    pub internal: HypothesisFilter<T, { NB + 1 }>,
+    /// External leak.
+    pub external: HypothesisFilter<T, { NB + 1 }>,
+    /// Both leaks.
+    pub both: HypothesisFilter<T, { NB + 2 }>,
+}
+
+/// Outcome of one bank step: per hypothesis, in `Hypothesis::ALL` order.
+pub type BankOutput<T> = [Result<FilterOutput<T>, EkfError>; 4];
+
+impl<T: Real> Bank<T> {
+    /// All four filters started at plant state `s0`.
+    pub fn new(s0: &[T; NX], p0: &[T; NB], leak_prior_sd: T) -> Self {
+        Self {
+            healthy: HypothesisFilter::new(Hypothesis::Healthy, s0, p0, leak_prior_sd),
+            internal: HypothesisFilter::new(Hypothesis::Internal, s0, p0, leak_prior_sd),
+            external: HypothesisFilter::new(Hypothesis::External, s0, p0, leak_prior_sd),
+            both: HypothesisFilter::new(Hypothesis::Both, s0, p0, leak_prior_sd),
+        }
+    }
+
+    /// Step every filter. A filter that fails is reported, not stopped:
+    /// the caller re-initialises it.
+    pub fn step(
+        &mut self,
+        plant: &Plant<T>,
+        ctx: &StepContext<T>,
+        noise: &ProcessNoise<T>,
+        m: &Measurement<T>,
+    ) -> BankOutput<T> {
+        [
+            self.healthy.step(plant, ctx, noise, m),
+            self.internal.step(plant, ctx, noise, m),
+            self.external.step(plant, ctx, noise, m),
+            self.both.step(plant, ctx, noise, m),
+        ]
+    }
+
+    /// Restart hypothesis `h`'s filter at plant state `s0`.
+    pub fn reset(&mut self, h: Hypothesis, s0: &[T; NX], p0: &[T; NB], leak_prior_sd: T) {
+        match h {
+            Hypothesis::Healthy => self.healthy = HypothesisFilter::new(h, s0, p0, leak_prior_sd),
+            Hypothesis::Internal => self.internal = HypothesisFilter::new(h, s0, p0, leak_prior_sd),
+            Hypothesis::External => self.external = HypothesisFilter::new(h, s0, p0, leak_prior_sd),
+            Hypothesis::Both => self.both = HypothesisFilter::new(h, s0, p0, leak_prior_sd),
+        }
+    }
+
+    /// Plant state estimate of hypothesis `h`, scaled units.
+    pub fn plant_state(&self, h: Hypothesis) -> [T; NX] {
+        let mut s = [T::ZERO; NX];
+        for (i, v) in s.iter_mut().enumerate() {
+            *v = match h {
+                Hypothesis::Healthy => self.healthy.ekf.x[i],
+                Hypothesis::Internal => self.internal.ekf.x[i],
+                Hypothesis::External => self.external.ekf.x[i],
+                Hypothesis::Both => self.both.ekf.x[i],
+            };
+        }
+        s
+    }
+}

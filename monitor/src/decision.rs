@@ -1,0 +1,323 @@
+//! From the bank's per-sample outputs to a verdict.
+//!
+//! Two kinds of evidence are combined:
+//!
+//! 1. **Leak size.** The `both` filter carries the internal and external
+//!    leak coefficients as states; their flows at the current pressures,
+//!    θ·|Δp|/10 bar, are averaged twice: over `detection_window_s` for
+//!    detection and over `evidence_window_s` for the reported size. A leak
+//!    is *present* when its fast average exceeds the alarm level; a leaky
+//!    persistence counter (a CUSUM on the indicator "above the alarm level")
+//!    must reach `debounce_s` before the alarm is raised. Alarms latch until
+//!    acknowledged; a new leak while one is latched escalates the verdict
+//!    (internal + external = both).
+//!
+//! 2. **Model probabilities.** Each filter's log-likelihood, tempered by the
+//!    residual correlation time (consecutive residuals of a physical model
+//!    are not independent; untempered, a 4 s window would be thousands of
+//!    "independent" samples and every probability would be 0 or 1) and
+//!    summed with exponential forgetting (so a hypothesis that fell behind
+//!    can come back, unlike a textbook MMAE bank), gives posterior
+//!    probabilities with a floor. Because the leak hypotheses are nested
+//!    (a filter with a free leak coefficient fits at least as well as one
+//!    without), each leak state pays a complexity penalty per second of
+//!    evidence. The probabilities are reported, and a leak alarm also needs
+//!    the hypotheses containing that leak to hold `min_probability` jointly.
+
+use crate::bank::FilterOutput;
+use crate::hypothesis::Hypothesis;
+use crate::params::Params;
+use crate::real::Real;
+use crate::status::{health, Event, Events, Evidence, Verdict};
+
+/// Mean NIS of the best filter above which the model is flagged as not
+/// fitting (χ²₃ has mean 3).
+const MISMATCH_NIS: f64 = 30.0;
+/// Lowest probability any hypothesis is given.
+const PROBABILITY_FLOOR: f64 = 1e-4;
+
+/// Decision state.
+#[derive(Clone, Debug)]
+pub struct Decision<T> {
+    slow_s: T,
+    fast_s: T,
+    temper: T,
+    penalty: T,
+    loglik: [T; 4],
+    nis: [T; 4],
+    /// Leak flows (internal, external) of the `both` filter, l/min: fast
+    /// and slow averages, and the slow average of their 1σ.
+    fast: [T; 2],
+    slow: [T; 2],
+    slow_sd: [T; 2],
+    persist: [T; 2],
+    raised: [bool; 2],
+    valve: [T; 2],
+    probability: [T; 4],
+    leading: Hypothesis,
+    latched: Verdict,
+    warning: bool,
+    mismatch: bool,
+    alarm_lpm: T,
+    warning_lpm: T,
+    debounce_s: T,
+    min_probability: T,
+}
+
+impl<T: Real> Decision<T> {
+    /// Decision state for `params`' thresholds.
+    pub fn new(params: &Params) -> Self {
+        let f = &params.filter;
+        Self {
+            slow_s: T::c(f.evidence_window_s),
+            fast_s: T::c(f.detection_window_s),
+            temper: T::c(1.0 / f.residual_correlation_samples),
+            penalty: T::c(f.complexity_penalty_per_s),
+            loglik: [T::ZERO; 4],
+            nis: [T::c(3.0); 4],
+            fast: [T::ZERO; 2],
+            slow: [T::ZERO; 2],
+            slow_sd: [T::ZERO; 2],
+            persist: [T::ZERO; 2],
+            raised: [false; 2],
+            valve: [T::ZERO; 2],
+            probability: [T::c(0.25); 4],
+            leading: Hypothesis::Healthy,
+            latched: Verdict::Healthy,
+            warning: false,
+            mismatch: false,
+            alarm_lpm: T::c(params.alarm.alarm_lpm),
+            warning_lpm: T::c(params.alarm.warning_lpm),
+            debounce_s: T::c(params.alarm.debounce_s),
+            min_probability: T::c(params.alarm.min_probability),
+        }
+    }
+
+    /// Forget the evidence (filters restarted); a latched alarm stays.
+    pub fn restart(&mut self) {
+        self.loglik = [T::ZERO; 4];
+        self.nis = [T::c(3.0); 4];
+        self.fast = [T::ZERO; 2];
+        self.slow = [T::ZERO; 2];
+        self.slow_sd = [T::ZERO; 2];
+        self.persist = [T::ZERO; 2];
+        self.raised = [false; 2];
+        self.probability = [T::c(0.25); 4];
+        self.leading = Hypothesis::Healthy;
+        self.warning = false;
+        self.mismatch = false;
+    }
+
+    /// Clear a latched alarm; returns whether one was latched. It is raised
+    /// again if the evidence still holds for the debounce time.
+    pub fn clear(&mut self) -> bool {
+        let was = self.latched.is_leak();
+        self.latched = Verdict::Healthy;
+        self.persist = [T::ZERO; 2];
+        self.raised = [false; 2];
+        was
+    }
+
+    /// Take one sample's filter outputs (`None`: that filter was reset).
+    /// `valid`: the sample counts as evidence. Returns health flags.
+    pub fn update(
+        &mut self,
+        out: &[Option<FilterOutput<T>>; 4],
+        dt: T,
+        weight: T,
+        valid: bool,
+        events: &mut Events,
+    ) -> u16 {
+        // Evidence time: a sample counts in proportion to how quasi-steady
+        // the plant is (`weight`, the learning weight). During fast moves a
+        // small coefficient error times a large pressure difference would
+        // otherwise look like a flow spike.
+        let dt_w = dt * weight;
+        // The reported size is the plain time average of the leak flow (a
+        // leak really flows more while the pressure difference is large);
+        // detection and model evidence count quiet time only.
+        let a_slow = (dt / self.slow_s).min(T::ONE);
+        let a_fast = (dt_w / self.fast_s).min(T::ONE);
+        let a_evidence = (dt_w / self.slow_s).min(T::ONE);
+        if let Some(both) = &out[Hypothesis::Both as usize] {
+            self.valve = both.valve_gain;
+            let flows = [both.flow_internal_lpm, both.flow_external_lpm];
+            let sds = [both.flow_internal_sd_lpm, both.flow_external_sd_lpm];
+            for k in 0..2 {
+                self.fast[k] += a_fast * (flows[k] - self.fast[k]);
+                self.slow[k] += a_slow * (flows[k] - self.slow[k]);
+                self.slow_sd[k] += a_slow * (sds[k] - self.slow_sd[k]);
+            }
+        }
+        if !valid {
+            return health::EVIDENCE_PAUSED | self.flags();
+        }
+        self.update_probabilities(out, dt_w, weight, a_evidence);
+
+        // Size test with persistence, per leak.
+        let mut new_leak = [false; 2];
+        for k in 0..2 {
+            let above = self.fast[k] >= self.alarm_lpm && self.supports(k);
+            self.persist[k] = if above {
+                self.persist[k] + dt_w
+            } else {
+                // Leaky: a brief dip does not restart the count.
+                (self.persist[k] - dt_w - dt_w).max(T::ZERO)
+            };
+            if self.persist[k] >= self.debounce_s && !self.raised[k] {
+                self.raised[k] = true;
+                new_leak[k] = true;
+            }
+        }
+        if new_leak[0] || new_leak[1] {
+            let found = match (self.raised[0], self.raised[1]) {
+                (true, true) => Verdict::Both,
+                (true, false) => Verdict::Internal,
+                (false, true) => Verdict::External,
+                (false, false) => Verdict::Healthy,
+            };
+            let merged = merge(self.latched, found);
+            if merged != self.latched {
+                self.latched = merged;
+                let _ = events.push(Event::AlarmRaised(merged));
+            }
+        }
+        self.warning = (self.slow[0] >= self.warning_lpm || self.slow[1] >= self.warning_lpm)
+            && !self.latched.is_leak();
+        self.mismatch = self.nis[self.leading as usize] > T::c(MISMATCH_NIS);
+        let paused = if weight < T::c(0.5) {
+            health::EVIDENCE_PAUSED
+        } else {
+            0
+        };
+        self.flags() | paused
+    }
+
+    /// Do the model probabilities support leak `k` (0 internal, 1 external)?
+    fn supports(&self, k: usize) -> bool {
+        let p = &self.probability;
+        let with = if k == 0 {
+            p[Hypothesis::Internal as usize] + p[Hypothesis::Both as usize]
+        } else {
+            p[Hypothesis::External as usize] + p[Hypothesis::Both as usize]
+        };
+        with >= self.min_probability
+    }
+
+    fn update_probabilities(&mut self, out: &[Option<FilterOutput<T>>; 4], dt_w: T, w: T, a: T) {
+        let keep = T::ONE - a;
+        let worst = self
+            .loglik
+            .iter()
+            .copied()
+            .fold(self.loglik[0], |m, v| m.min(v));
+        for (i, o) in out.iter().enumerate() {
+            match o {
+                Some(o) => {
+                    let states = T::c(
+                        (Hypothesis::ALL[i].has_internal() as u8
+                            + Hypothesis::ALL[i].has_external() as u8)
+                            as f64,
+                    );
+                    self.loglik[i] = keep * self.loglik[i] + o.log_likelihood * self.temper * w
+                        - self.penalty * states * dt_w;
+                    self.nis[i] = keep * self.nis[i] + a * o.nis;
+                }
+                // A restarted filter starts over with the worst evidence.
+                None => self.loglik[i] = worst,
+            }
+        }
+        let mut best = 0;
+        for i in 1..4 {
+            if self.loglik[i] > self.loglik[best] {
+                best = i;
+            }
+        }
+        let floor = T::c(PROBABILITY_FLOOR);
+        let mut w = [T::ZERO; 4];
+        let mut total = T::ZERO;
+        for i in 0..4 {
+            // exp of a non-positive number, clamped so it never underflows.
+            let d = (self.loglik[i] - self.loglik[best]).max(T::c(-30.0));
+            w[i] = if i == best { T::ONE } else { d.exp() };
+            total += w[i];
+        }
+        let scale = T::ONE - T::c(4.0) * floor;
+        for i in 0..4 {
+            self.probability[i] = floor + scale * w[i] / total;
+        }
+        self.leading = Hypothesis::ALL[best];
+    }
+
+    /// Health flags from the decision.
+    pub fn flags(&self) -> u16 {
+        let mut f = 0;
+        if self.warning {
+            f |= health::LEAK_WARNING;
+        }
+        if self.latched.is_leak() {
+            f |= health::ALARM_LATCHED;
+        }
+        if self.mismatch {
+            f |= health::MODEL_MISMATCH;
+        }
+        f
+    }
+
+    /// The latched verdict (healthy if none).
+    pub fn verdict(&self) -> Verdict {
+        self.latched
+    }
+
+    /// The hypothesis with the most evidence.
+    pub fn leading(&self) -> Hypothesis {
+        self.leading
+    }
+
+    /// Reported leak flows (internal, external) and their 1σ, l/min:
+    /// averages over the evidence window.
+    pub fn leak_flows(&self) -> ([f32; 2], [f32; 2]) {
+        (
+            [self.slow[0].to_f32(), self.slow[1].to_f32()],
+            [self.slow_sd[0].to_f32(), self.slow_sd[1].to_f32()],
+        )
+    }
+
+    /// Valve flow-gain deviations (extend, retract; relative) as estimated
+    /// by the `both` filter.
+    pub fn valve(&self) -> [f32; 2] {
+        [self.valve[0].to_f32(), self.valve[1].to_f32()]
+    }
+
+    /// The fast (detection) averages of the leak flows, l/min.
+    pub fn detection_flows(&self) -> [f32; 2] {
+        [self.fast[0].to_f32(), self.fast[1].to_f32()]
+    }
+
+    /// Evidence per hypothesis.
+    pub fn evidence(&self) -> [Evidence; 4] {
+        let mut e = [Evidence::default(); 4];
+        for i in 0..4 {
+            e[i] = Evidence {
+                probability: self.probability[i].to_f32(),
+                log_likelihood: self.loglik[i].to_f32(),
+                mean_nis: self.nis[i].to_f32(),
+            };
+        }
+        e
+    }
+}
+
+/// The union of two leak verdicts.
+fn merge(a: Verdict, b: Verdict) -> Verdict {
+    let internal = matches!(a, Verdict::Internal | Verdict::Both)
+        || matches!(b, Verdict::Internal | Verdict::Both);
+    let external = matches!(a, Verdict::External | Verdict::Both)
+        || matches!(b, Verdict::External | Verdict::Both);
+    match (internal, external) {
+        (true, true) => Verdict::Both,
+        (true, false) => Verdict::Internal,
+        (false, true) => Verdict::External,
+        (false, false) => Verdict::Healthy,
+    }
+}

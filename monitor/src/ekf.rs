@@ -1,0 +1,239 @@
+//! A fixed-size extended Kalman filter core on nalgebra static matrices.
+//!
+//! The model supplies the discrete transition Jacobian Φ; measurements are
+//! direct readings of single states (H rows are unit vectors), processed
+//! one scalar at a time. For independent measurement noise this is exactly
+//! the batch update, needs no matrix inverse, and makes the innovation
+//! covariance a scalar whose failure is easy to detect. The covariance is
+//! updated in Joseph form, P ← (I − k·hᵀ)·P·(I − k·hᵀ)ᵀ + k·r·kᵀ, which stays
+//! symmetric positive semi-definite under rounding, and is re-symmetrised
+//! after every prediction.
+
+use crate::real::Real;
+use nalgebra::{SMatrix, SVector};
+
+/// Why a filter step failed. The caller re-initialises that filter and
+/// flags it; nothing panics.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum EkfError {
+    /// The innovation variance of measurement `index` was not a positive
+    /// finite number.
+    InnovationCovariance {
+        /// Which measurement of the update (0-based).
+        index: u8,
+    },
+    /// The state or covariance became NaN or infinite.
+    NonFinite,
+}
+
+/// State estimate and covariance of one filter.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Ekf<T: Real, const N: usize> {
+    /// State estimate.
+    pub x: SVector<T, N>,
+    /// Its covariance.
+    pub p: SMatrix<T, N, N>,
+}
+
+/// The outcome of one scalar measurement update.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ScalarUpdate<T> {
+    /// Innovation ν = z − x_j.
+    pub innovation: T,
+    /// Innovation variance s = P_jj + r.
+    pub variance: T,
+}
+
+impl<T: Real, const N: usize> Ekf<T, N> {
+    /// A filter at `x` with diagonal covariance `p_diag`.
+    pub fn new(x: SVector<T, N>, p_diag: &SVector<T, N>) -> Self {
+        Self {
+            x,
+            p: SMatrix::from_diagonal(p_diag),
+        }
+    }
+
+    /// Covariance prediction P ← Φ·P·Φᵀ + diag(q). The mean is predicted by
+    /// the caller (it integrates the nonlinear model).
+    pub fn predict_covariance(
+        &mut self,
+        phi: &SMatrix<T, N, N>,
+        q_diag: &SVector<T, N>,
+    ) -> Result<(), EkfError> {
+        let mut p = phi * self.p * phi.transpose();
+        for i in 0..N {
+            p[(i, i)] += q_diag[i];
+        }
+        symmetrise(&mut p);
+        self.p = p;
+        self.check()
+    }
+
+    /// Update with a direct reading `z` of state `j` with noise variance
+    /// `r`, in Joseph form. `index` names the measurement in errors.
+    pub fn update_state(
+        &mut self,
+        j: usize,
+        z: T,
+        r: T,
+        index: u8,
+    ) -> Result<ScalarUpdate<T>, EkfError> {
+        self.update_state_weighted(j, z, r, index, N, T::ONE)
+    }
+
+    /// As [`Self::update_state`], with the gain of states `from..N` scaled
+    /// by `weight` ∈ [0, 1] (conditional adaptation: slowly varying
+    /// parameters do not learn from samples the model is known to describe
+    /// poorly). The Joseph form gives the exact covariance of the estimator
+    /// for any gain, so P stays consistent with what the filter does.
+    pub fn update_state_weighted(
+        &mut self,
+        j: usize,
+        z: T,
+        r: T,
+        index: u8,
+        from: usize,
+        weight: T,
+    ) -> Result<ScalarUpdate<T>, EkfError> {
+        let s = self.p[(j, j)] + r;
+        if !(s.is_finite() && s > T::ZERO) {
+            return Err(EkfError::InnovationCovariance { index });
+        }
+        let nu = z - self.x[j];
+        let inv_s = T::ONE / s;
+        let pj: SVector<T, N> = self.p.column(j).into_owned();
+        let mut k: SVector<T, N> = pj * inv_s;
+        for i in from..N {
+            k[i] *= weight;
+        }
+        self.x += k * nu;
+        // Joseph form with h = e_j, elementwise (valid for any gain k):
+        // P_ab − k_a·P_jb − P_aj·k_b + s·k_a·k_b.
+        for a in 0..N {
+            for b in a..N {
+                let v = self.p[(a, b)] - k[a] * pj[b] - pj[a] * k[b] + s * k[a] * k[b];
+                self.p[(a, b)] = v;
+                self.p[(b, a)] = v;
+            }
+        }
+        self.check()?;
+        Ok(ScalarUpdate {
+            innovation: nu,
+            variance: s,
+        })
+    }
+
+    /// Every entry finite.
+    fn check(&self) -> Result<(), EkfError> {
+        if self.x.iter().all(|v| v.is_finite()) && self.p.iter().all(|v| v.is_finite()) {
+            Ok(())
+        } else {
+            Err(EkfError::NonFinite)
+        }
+    }
+
+    /// Smallest diagonal entry of P (a cheap PSD sanity check; tests check
+    /// eigenvalues on the host).
+    pub fn min_variance(&self) -> T {
+        let mut m = self.p[(0, 0)];
+        for i in 1..N {
+            m = m.min(self.p[(i, i)]);
+        }
+        m
+    }
+}
+
+/// P ← (P + Pᵀ)/2.
+fn symmetrise<T: Real, const N: usize>(p: &mut SMatrix<T, N, N>) {
+    let half = T::c(0.5);
+    for a in 0..N {
+        for b in a + 1..N {
+            let v = (p[(a, b)] + p[(b, a)]) * half;
+            p[(a, b)] = v;
+            p[(b, a)] = v;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::{Matrix2, Vector2};
+
+    #[test]
+    fn scalar_updates_equal_the_batch_update() {
+        // Two independent measurements of a correlated 2-state filter.
+        let x0 = Vector2::new(1.0f64, -0.5);
+        let p0 = Matrix2::new(2.0, 0.6, 0.6, 1.0);
+        let r = [0.3, 0.2];
+        let z = [1.4, -0.1];
+        let mut f = Ekf { x: x0, p: p0 };
+        f.update_state(0, z[0], r[0], 0).unwrap();
+        f.update_state(1, z[1], r[1], 1).unwrap();
+        // Batch: K = P Hᵀ (H P Hᵀ + R)⁻¹ with H = I.
+        let s = p0 + Matrix2::new(r[0], 0.0, 0.0, r[1]);
+        let k = p0 * s.try_inverse().unwrap();
+        let xb = x0 + k * (Vector2::new(z[0], z[1]) - x0);
+        let pb = (Matrix2::identity() - k) * p0;
+        assert!((f.x - xb).norm() < 1e-12);
+        assert!((f.p - pb).norm() < 1e-12);
+    }
+
+    #[test]
+    fn weighted_gain_keeps_the_exact_covariance_of_the_estimator() {
+        // With state 1's gain zeroed, its estimate must not move and the
+        // Joseph covariance must equal the Monte-Carlo-free closed form
+        // (I − K H) P (I − K H)ᵀ + K R Kᵀ.
+        let p0 = Matrix2::new(2.0f64, 0.6, 0.6, 1.0);
+        let mut f = Ekf {
+            x: Vector2::new(0.0, 0.0),
+            p: p0,
+        };
+        f.update_state_weighted(0, 1.0, 0.5, 0, 1, 0.0).unwrap();
+        assert_eq!(f.x[1], 0.0);
+        let k = Vector2::new(2.0 / 2.5, 0.0);
+        let h = Vector2::new(1.0, 0.0);
+        let a = Matrix2::identity() - k * h.transpose();
+        let want = a * p0 * a.transpose() + k * 0.5 * k.transpose();
+        assert!((f.p - want).norm() < 1e-12);
+        // Its variance is unchanged but the cross term is not.
+        assert!((f.p[(1, 1)] - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn bad_innovation_covariance_is_an_error_not_a_panic() {
+        let mut f = Ekf::<f32, 2>::new(Vector2::new(0.0, 0.0), &Vector2::new(1.0, 1.0));
+        assert_eq!(
+            f.update_state(0, 1.0, -2.0, 0),
+            Err(EkfError::InnovationCovariance { index: 0 })
+        );
+        assert_eq!(
+            f.update_state(1, 1.0, f32::NAN, 1),
+            Err(EkfError::InnovationCovariance { index: 1 })
+        );
+        let err = f.update_state(0, f32::INFINITY, 1.0, 2);
+        assert_eq!(err, Err(EkfError::NonFinite));
+    }
+
+    #[test]
+    fn joseph_form_keeps_covariance_psd_with_tiny_noise() {
+        // A nearly noiseless measurement of a strongly correlated state pair
+        // in f32: the naive (I − KH)P form loses symmetry/positivity here.
+        let mut f = Ekf::<f32, 2> {
+            x: Vector2::new(0.0, 0.0),
+            p: Matrix2::new(1.0, 0.999_99, 0.999_99, 1.0),
+        };
+        for _ in 0..1000 {
+            f.update_state(0, 0.0, 1e-9, 0).unwrap();
+            f.predict_covariance(
+                &Matrix2::new(1.0, 1e-3, 0.0, 1.0),
+                &Vector2::new(1e-9, 1e-9),
+            )
+            .unwrap();
+        }
+        assert_eq!(f.p[(0, 1)], f.p[(1, 0)]);
+        assert!(f.p[(0, 0)] >= 0.0 && f.p[(1, 1)] >= 0.0);
+        assert!(f.p[(0, 0)] * f.p[(1, 1)] - f.p[(0, 1)] * f.p[(0, 1)] >= -1e-12);
+    }
+}

@@ -1,0 +1,63 @@
+//! The four leak hypotheses of the filter bank.
+
+/// Which leaks a hypothesis (and its filter) contains.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Hypothesis {
+    /// No leak beyond the installation's healthy leakage.
+    Healthy = 0,
+    /// Leak across the piston seal, piston chamber → rod chamber.
+    Internal = 1,
+    /// Leak from the rod-side line to tank (e.g. across the valve).
+    External = 2,
+    /// Both leaks at once.
+    Both = 3,
+}
+
+impl Hypothesis {
+    /// All hypotheses, in bank order.
+    pub const ALL: [Hypothesis; 4] = [Self::Healthy, Self::Internal, Self::External, Self::Both];
+
+    /// Does it contain the internal leak?
+    pub const fn has_internal(self) -> bool {
+        matches!(self, Self::Internal | Self::Both)
+    }
+
+    /// Does it contain the external leak?
+    pub const fn has_external(self) -> bool {
+        matches!(self, Self::External | Self::Both)
+    }
+
+    /// State index of the internal leak coefficient, if any.
+    pub const fn internal_index(self) -> Option<usize> {
+        if self.has_internal() {
+            Some(crate::bank::NB)
+        } else {
+            None
+        }
+    }
+
+    /// State index of the external leak coefficient, if any.
+    pub const fn external_index(self) -> Option<usize> {
+        match self {
+            Self::External => Some(crate::bank::NB),
+            Self::Both => Some(crate::bank::NB + 1),
+            _ => None,
+        }
+    }
+
+    /// Number of filter states: plant, valve nuisance, leaks.
+    pub const fn states(self) -> usize {
+        crate::bank::NB + self.has_internal() as usize + self.has_external() as usize
+    }
+
+    /// Lower-case name, as in the replay JSON.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Self::Healthy => "healthy",
+            Self::Internal => "internal",
+            Self::External => "external",
+            Self::Both => "both",
+        }
+    }
+}

@@ -1,0 +1,355 @@
+//! The monitor: one entry point, [`Monitor::step`], from a sample to a
+//! status. Deterministic: the same samples give the same statuses, bit for
+//! bit, on any IEEE-754 machine (see `real.rs`).
+
+use crate::bank::{Bank, FilterOutput, Measurement, ProcessNoise, StepContext, NB, NZ};
+use crate::decision::Decision;
+use crate::ekf::EkfError;
+use crate::fluid::laminar_flow_factor;
+use crate::hypothesis::Hypothesis;
+use crate::model::{Inputs, Plant, Step, BAR, GAIN_REF, NX, P_REF, X_REF};
+use crate::params::{ParamError, Params};
+use crate::quiet::Quietness;
+use crate::real::Real;
+use crate::sample::{Channel, Sample};
+use crate::signal::{Conditioned, SampleChecker};
+use crate::status::{health, Event, Events, Status, Verdict};
+use crate::valve::SpoolStep;
+
+/// A step longer than this many nominal periods is a data gap.
+pub const GAP_PERIODS: f64 = 5.0;
+
+/// Derived per-installation constants.
+#[derive(Clone, Debug)]
+struct Config<T> {
+    r: [T; NZ],
+    noise: ProcessNoise<T>,
+    p0: [T; NB],
+    leak_prior_sd: T,
+    substeps: u32,
+    period_s: f64,
+    pressure_lag_s: T,
+    warm_up_s: f64,
+}
+
+/// The leak monitor for one cylinder.
+#[derive(Clone, Debug)]
+pub struct Monitor<T: Real = f32> {
+    plant: Plant<T>,
+    cfg: Config<T>,
+    checker: SampleChecker,
+    bank: Option<Bank<T>>,
+    last_t: Option<f64>,
+    spool_dt_s: f64,
+    spool_sub: SpoolStep<T>,
+    spool_dt: SpoolStep<T>,
+    since_start_s: f64,
+    decision: Decision<T>,
+    temp_c: Option<f32>,
+    laminar_factor: T,
+    /// Inputs of the previous sample: they drove the plant until this one.
+    held: Option<HeldInputs>,
+    /// How quasi-steady the plant is: the learning weight of the parameter
+    /// states and the weight of each sample as evidence (see `quiet`).
+    quiet: Quietness<T>,
+    fluid_ref: crate::params::Fluid,
+}
+
+impl<T: Real> Monitor<T> {
+    /// A monitor for the installation described by `params`.
+    pub fn new(params: &Params) -> Result<Self, ParamError> {
+        params.validate()?;
+        let plant = Plant::new(params);
+        let f = &params.filter;
+        let sx = params.sensors.position_noise_m / X_REF;
+        let sp = params.sensors.pressure_noise_bar * BAR / P_REF;
+        let cfg = Config {
+            r: [T::c(sx * sx), T::c(sp * sp), T::c(sp * sp)],
+            noise: ProcessNoise {
+                base: [
+                    T::c(f.q_position),
+                    T::c(f.q_velocity),
+                    T::c(f.q_spool),
+                    T::c(f.q_spool_rate),
+                    T::c(f.q_pressure),
+                    T::c(f.q_pressure),
+                    T::c(f.q_gain / (GAIN_REF * GAIN_REF)),
+                    T::c(f.q_gain / (GAIN_REF * GAIN_REF)),
+                ],
+                leak: T::c(f.q_leak),
+            },
+            // Start: position and pressures from the readings, velocity 0,
+            // spool at the command, valve as parameterised.
+            p0: [
+                T::c(sx * sx * 4.0),
+                T::c(0.01),
+                T::c(0.0025),
+                T::c(0.01),
+                T::c(4.0 * sp * sp),
+                T::c(4.0 * sp * sp),
+                T::c(sq(f.gain_prior / GAIN_REF)),
+                T::c(sq(f.gain_prior / GAIN_REF)),
+            ],
+            leak_prior_sd: T::c(f.leak_prior_lpm),
+            substeps: f.substeps,
+            period_s: f.sample_period_s,
+            pressure_lag_s: T::c(params.sensors.pressure_lag_s),
+            warm_up_s: f.warm_up_s,
+        };
+        let period = f.sample_period_s;
+        Ok(Self {
+            spool_sub: plant.spool_step(period / f.substeps as f64),
+            spool_dt: plant.spool_step(period),
+            spool_dt_s: period,
+            plant,
+            cfg,
+            checker: SampleChecker::new(params),
+            bank: None,
+            last_t: None,
+            since_start_s: 0.0,
+            decision: Decision::new(params),
+            temp_c: None,
+            laminar_factor: T::ONE,
+            held: None,
+            quiet: Quietness::new(f.quiet_rate_bar_s, f.quiet_flow_lpm, f.learning_recovery_s),
+            fluid_ref: params.fluid.clone(),
+        })
+    }
+
+    /// Acknowledge and clear a latched leak alarm. It is raised again if the
+    /// evidence still holds after the debounce time.
+    pub fn clear_alarm(&mut self) -> bool {
+        self.decision.clear()
+    }
+
+    /// Process one sample.
+    pub fn step(&mut self, sample: &Sample) -> Status {
+        let mut events = Events::new();
+        let mut flags = 0u16;
+        let checked = self.checker.check(sample, &mut events);
+
+        // Time step: a non-increasing time is ignored, a gap restarts.
+        let dt = match self.last_t {
+            Some(t0) if !(sample.t_s > t0) => {
+                flags |= health::TIME_NOT_INCREASING;
+                return self.status(sample.t_s, checked.faulted, flags, events);
+            }
+            Some(t0) => sample.t_s - t0,
+            None => self.cfg.period_s,
+        };
+        self.last_t = Some(sample.t_s);
+        if dt > GAP_PERIODS * self.cfg.period_s && self.bank.is_some() {
+            self.bank = None;
+            self.held = None;
+            flags |= health::DATA_GAP;
+            let _ = events.push(Event::DataGap);
+        }
+
+        let Some(c) = checked.values else {
+            // A required channel is faulted: no estimation. Filters restart
+            // from fresh readings once every channel is back.
+            self.bank = None;
+            self.held = None;
+            return self.status(
+                sample.t_s,
+                checked.faulted,
+                flags | health::SENSOR_FAULT,
+                events,
+            );
+        };
+        self.update_temperature(c.temp_oil_c);
+
+        let m = self.measurement(&c);
+        // The command (and the port pressures) read at the previous sample
+        // were held over the interval that ends now: the recorded command is
+        // the one issued at its sample instant.
+        let now = HeldInputs {
+            p_supply_bar: c.p_supply_bar,
+            p_tank_bar: c.p_tank_bar,
+            u_valve: c.u_valve,
+        };
+        let held = self.held.replace(now).unwrap_or(now);
+        let Some(bank) = self.bank.as_mut() else {
+            let s0 = initial_state(&c);
+            self.bank = Some(Bank::new(&s0, &self.cfg.p0, self.cfg.leak_prior_sd));
+            self.since_start_s = 0.0;
+            self.decision.restart();
+            self.quiet.restart();
+            return self.status(
+                sample.t_s,
+                checked.faulted,
+                flags | health::WARMING_UP,
+                events,
+            );
+        };
+
+        if (dt - self.spool_dt_s).abs() > 1e-6 * self.spool_dt_s {
+            self.spool_dt_s = dt;
+            self.spool_dt = self.plant.spool_step(dt);
+            self.spool_sub = self.plant.spool_step(dt / self.cfg.substeps as f64);
+        }
+        let ctx = StepContext {
+            inputs: Inputs {
+                p_supply_pa: T::from_f32(held.p_supply_bar) * T::c(BAR),
+                p_tank_pa: T::from_f32(held.p_tank_bar) * T::c(BAR),
+                u_valve: T::from_f32(held.u_valve),
+                laminar_factor: self.laminar_factor,
+            },
+            step: Step {
+                dt: T::c(dt),
+                substeps: self.cfg.substeps,
+                spool: self.spool_sub,
+            },
+            spool_dt: self.spool_dt,
+            pressure_lag_s: self.cfg.pressure_lag_s,
+            learning: self.quiet.weight(),
+        };
+        let outputs = bank.step(&self.plant, &ctx, &self.cfg.noise, &m);
+        let mut ok: [Option<FilterOutput<T>>; 4] = [None; 4];
+        for (i, out) in outputs.into_iter().enumerate() {
+            match out {
+                Ok(o) => ok[i] = Some(o),
+                Err(EkfError::InnovationCovariance { .. }) | Err(EkfError::NonFinite) => {
+                    let h = Hypothesis::ALL[i];
+                    // Restart the failed filter from the healthy filter's
+                    // (or the readings') plant state.
+                    let s0 = initial_state(&c);
+                    bank.reset(h, &s0, &self.cfg.p0, self.cfg.leak_prior_sd);
+                    flags |= health::FILTER_RESET;
+                    let _ = events.push(Event::FilterReset(h));
+                }
+            }
+        }
+        if let Some(h) = &ok[0] {
+            let s = bank.plant_state(Hypothesis::Healthy);
+            let bar = T::c(P_REF / BAR);
+            self.quiet.update(
+                s[4] * bar,
+                s[5] * bar,
+                T::from_f32(c.u_valve),
+                h.valve_flow_lpm,
+                T::c(dt),
+            );
+        }
+        self.since_start_s += dt;
+        let warming = self.since_start_s < self.cfg.warm_up_s;
+        if warming {
+            flags |= health::WARMING_UP;
+        }
+        flags |= self.decision.update(
+            &ok,
+            T::c(dt),
+            self.quiet.weight(),
+            !warming && flags & health::FILTER_RESET == 0,
+            &mut events,
+        );
+        self.status(sample.t_s, checked.faulted, flags, events)
+    }
+
+    fn update_temperature(&mut self, temp: Option<f32>) {
+        // exp() only when the temperature moves by more than 0.1 °C.
+        match (temp, self.temp_c) {
+            (Some(t), Some(last)) if (t - last).abs() < 0.1 => {}
+            (Some(t), _) => {
+                self.temp_c = Some(t);
+                self.laminar_factor = T::c(laminar_flow_factor(&self.fluid_ref, t as f64));
+            }
+            (None, _) => {}
+        }
+    }
+
+    fn measurement(&self, c: &Conditioned) -> Measurement<T> {
+        Measurement {
+            z: [
+                T::from_f32(c.x_piston_m) / T::c(X_REF),
+                T::from_f32(c.p_piston_bar) * T::c(BAR / P_REF),
+                T::from_f32(c.p_rod_bar) * T::c(BAR / P_REF),
+            ],
+            r: self.cfg.r,
+        }
+    }
+
+    fn status(&self, t_s: f64, faulted: u8, mut flags: u16, events: Events) -> Status {
+        if faulted != 0 {
+            flags |= health::SENSOR_FAULT;
+        }
+        let d = &self.decision;
+        flags |= d.flags();
+        let verdict = if faulted != 0 {
+            Verdict::SensorFault
+        } else {
+            d.verdict()
+        };
+        let estimating = self.bank.is_some() && flags & health::WARMING_UP == 0;
+        let ([li, le], [sdi, sde]) = d.leak_flows();
+        let [fi, fe] = d.detection_flows();
+        Status {
+            t_s,
+            verdict,
+            leading: d.leading(),
+            leak_internal_lpm: estimating.then_some(li),
+            leak_external_lpm: estimating.then_some(le),
+            leak_internal_sd_lpm: estimating.then_some(sdi),
+            leak_external_sd_lpm: estimating.then_some(sde),
+            detect_internal_lpm: estimating.then_some(fi),
+            detect_external_lpm: estimating.then_some(fe),
+            valve_gain_deviation: d.valve(),
+            evidence_weight: self.quiet.weight().to_f32(),
+            evidence: d.evidence(),
+            faulted_channels: faulted,
+            health: flags,
+            events,
+        }
+    }
+
+    /// Plant state estimate of hypothesis `h` in SI units
+    /// `[x_p m, ẋ_p m/s, x_v, ẋ_v 1/s, p3 Pa, p4 Pa]`, if running.
+    pub fn plant_state_si(&self, h: Hypothesis) -> Option<[f64; NX]> {
+        let b = self.bank.as_ref()?;
+        let s = b.plant_state(h);
+        let omega = self.plant.omega.to_f64();
+        Some([
+            s[0].to_f64() * X_REF,
+            s[1].to_f64() * crate::model::V_REF,
+            s[2].to_f64(),
+            s[3].to_f64() * omega,
+            s[4].to_f64() * P_REF,
+            s[5].to_f64() * P_REF,
+        ])
+    }
+
+    /// The filter bank, if running (for diagnostics and tests).
+    pub fn bank(&self) -> Option<&Bank<T>> {
+        self.bank.as_ref()
+    }
+
+    /// Channel the checker considers faulted right now.
+    pub fn faulted(&self, ch: Channel) -> bool {
+        self.checker.faulted() & ch.bit() != 0
+    }
+}
+
+fn sq(v: f64) -> f64 {
+    v * v
+}
+
+/// Inputs held over a sample interval.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct HeldInputs {
+    p_supply_bar: f32,
+    p_tank_bar: f32,
+    u_valve: f32,
+}
+
+/// Filter start: position and pressures from the readings, at rest, spool
+/// at the command.
+fn initial_state<T: Real>(c: &Conditioned) -> [T; NX] {
+    [
+        T::from_f32(c.x_piston_m) / T::c(X_REF),
+        T::ZERO,
+        T::from_f32(c.u_valve),
+        T::ZERO,
+        T::from_f32(c.p_piston_bar) * T::c(BAR / P_REF),
+        T::from_f32(c.p_rod_bar) * T::c(BAR / P_REF),
+    ]
+}

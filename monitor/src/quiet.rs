@@ -1,0 +1,146 @@
+//! When does a sample count as leak evidence?
+//!
+//! Leaks are small flows (0.05–1 l/min) against valve flows of 5–40 l/min.
+//! The evidence about them is good while the plant is *quasi-steady*:
+//! holds, and slow steady moves. It is poor during transients — valve
+//! steps, breakaway from stiction, the start and end of moves — where the
+//! estimated piston velocity lags the truth by tens of milliseconds (at
+//! A_p = 3·10⁻³ m², 10 mm/s of velocity error is 1.9 l/min of apparent
+//! flow) and the pressure transmitters' 4 ms lag shows, and during fast
+//! moves, where a 2 % model error is more flow than the leak sought and a
+//! small leak-coefficient error times a large pressure difference looks
+//! like a flow spike.
+//!
+//! The *evidence weight* w ∈ (0, 1] measures this from what is observed,
+//! not from the model's own derivatives (a tiny flow mismatch in a small,
+//! stiff chamber is already 15 bar/s of model rate, balanced every sample
+//! by the measurement update):
+//!
+//! w = 1 / (1 + (r/r₀)² + (c/c₀)² + (q/q₀)²),
+//!
+//! r = smoothed rate of the estimated chamber pressures (bar/s), c =
+//! smoothed rate of the valve command (1/s), q = valve metering flow
+//! (l/min). After a transient w drops at once and recovers with a time
+//! constant, so the tail of a transient does not count either. The valve
+//! and leak parameter states learn with gain × w, and the decision counts
+//! evidence time as dt × w.
+
+use crate::real::Real;
+
+/// Smoothing time constant of the rates, s.
+const RATE_SMOOTHING_S: f64 = 0.02;
+/// Command rate at which w halves, 1/s (full travel in 2 s).
+const QUIET_COMMAND_RATE: f64 = 0.5;
+
+/// Tracks how quasi-steady the plant is.
+#[derive(Clone, Debug)]
+pub struct Quietness<T> {
+    rate_ref_bar_s: T,
+    flow_ref_lpm: T,
+    recovery_s: T,
+    last: Option<[T; 3]>,
+    rates: [T; 3],
+    weight: T,
+}
+
+impl<T: Real> Quietness<T> {
+    /// A tracker: pressure rate `rate_ref_bar_s` (bar/s) and valve flow
+    /// `flow_ref_lpm` (l/min) halve the weight; it recovers with
+    /// `recovery_s`. A `rate_ref_bar_s` ≤ 0 disables the weighting.
+    pub fn new(rate_ref_bar_s: f64, flow_ref_lpm: f64, recovery_s: f64) -> Self {
+        Self {
+            rate_ref_bar_s: T::c(rate_ref_bar_s),
+            flow_ref_lpm: T::c(flow_ref_lpm),
+            recovery_s: T::c(recovery_s.max(1e-6)),
+            last: None,
+            rates: [T::ZERO; 3],
+            weight: T::ZERO,
+        }
+    }
+
+    /// Forget everything (filters restarted): weight 0, rising.
+    pub fn restart(&mut self) {
+        self.last = None;
+        self.rates = [T::ZERO; 3];
+        self.weight = T::ZERO;
+    }
+
+    /// The current weight.
+    pub fn weight(&self) -> T {
+        self.weight
+    }
+
+    /// Update with the estimated chamber pressures (bar), the valve command
+    /// and the valve metering flow (l/min) after a step of `dt` s.
+    pub fn update(
+        &mut self,
+        p_piston_bar: T,
+        p_rod_bar: T,
+        command: T,
+        valve_flow_lpm: T,
+        dt: T,
+    ) -> T {
+        if !(self.rate_ref_bar_s > T::ZERO) {
+            self.weight = T::ONE;
+            return self.weight;
+        }
+        let now = [p_piston_bar, p_rod_bar, command];
+        if let Some(last) = self.last {
+            let a = (dt / T::c(RATE_SMOOTHING_S)).min(T::ONE);
+            for i in 0..3 {
+                let rate = (now[i] - last[i]) / dt;
+                self.rates[i] += a * (rate - self.rates[i]);
+            }
+        }
+        self.last = Some(now);
+        let r = self.rates[0].abs().max(self.rates[1].abs()) / self.rate_ref_bar_s;
+        let c = self.rates[2].abs() / T::c(QUIET_COMMAND_RATE);
+        let q = valve_flow_lpm / self.flow_ref_lpm;
+        let instant = T::ONE / (T::ONE + r * r + c * c + q * q);
+        let recovered = self.weight + (T::ONE - self.weight) * (dt / self.recovery_s).min(T::ONE);
+        self.weight = instant.min(recovered);
+        self.weight
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn steady_plant_weighs_one_transients_near_zero_then_recover() {
+        let mut q = Quietness::<f64>::new(10.0, 10.0, 0.3);
+        let dt = 0.001;
+        let mut w = 0.0;
+        for _ in 0..3000 {
+            w = q.update(26.0, 24.0, 0.0, 0.1, dt);
+        }
+        assert!(w > 0.99, "hold: {w}");
+        // A valve step: command jumps and pressures ramp at 200 bar/s.
+        let mut p = 26.0;
+        for _ in 0..50 {
+            p += 0.2;
+            w = q.update(p, 24.0, 0.3, 12.0, dt);
+        }
+        assert!(w < 0.05, "transient: {w}");
+        // Steady again: weight recovers over a few recovery times.
+        for _ in 0..300 {
+            w = q.update(p, 24.0, 0.3, 0.1, dt);
+        }
+        assert!(w > 0.5 && w < 0.9, "recovering: {w}");
+        for _ in 0..2000 {
+            w = q.update(p, 24.0, 0.3, 0.1, dt);
+        }
+        assert!(w > 0.99);
+    }
+
+    #[test]
+    fn fast_moves_weigh_little() {
+        let mut q = Quietness::<f32>::new(10.0, 10.0, 0.3);
+        let mut w = 0.0;
+        for _ in 0..2000 {
+            w = q.update(25.0, 5.0, 0.6, 35.0, 0.001);
+        }
+        assert!(w < 0.1, "{w}");
+    }
+}

@@ -1,0 +1,146 @@
+//! What the monitor reports after each sample.
+
+use crate::hypothesis::Hypothesis;
+use crate::sample::Channel;
+
+/// The monitor's verdict.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Verdict {
+    /// No leak alarm.
+    Healthy = 0,
+    /// Leak across the piston seal (piston chamber → rod chamber).
+    Internal = 1,
+    /// Leak from the rod-side line to tank.
+    External = 2,
+    /// Both leaks.
+    Both = 3,
+    /// A measurement the monitor cannot trust: no leak verdict possible.
+    SensorFault = 4,
+}
+
+impl Verdict {
+    /// Lower-case name, as in the replay JSON.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Self::Healthy => "healthy",
+            Self::Internal => "internal",
+            Self::External => "external",
+            Self::Both => "both",
+            Self::SensorFault => "sensor_fault",
+        }
+    }
+
+    /// The leak verdict of a hypothesis.
+    pub const fn from_hypothesis(h: Hypothesis) -> Self {
+        match h {
+            Hypothesis::Healthy => Self::Healthy,
+            Hypothesis::Internal => Self::Internal,
+            Hypothesis::External => Self::External,
+            Hypothesis::Both => Self::Both,
+        }
+    }
+
+    /// Is this a leak alarm?
+    pub const fn is_leak(self) -> bool {
+        matches!(self, Self::Internal | Self::External | Self::Both)
+    }
+}
+
+/// Evidence for one hypothesis.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Evidence {
+    /// Posterior probability among the four hypotheses.
+    pub probability: f32,
+    /// Windowed log-likelihood (forgetting over the evidence window).
+    pub log_likelihood: f32,
+    /// Windowed mean normalised innovation squared (≈ 3 when the filter's
+    /// model fits the data).
+    pub mean_nis: f32,
+}
+
+/// Health flags (bit mask in [`Status::health`]).
+pub mod health {
+    /// Filters started or restarted less than the warm-up time ago.
+    pub const WARMING_UP: u16 = 1 << 0;
+    /// This sample did not count as evidence (transient, fault, warm-up).
+    pub const EVIDENCE_PAUSED: u16 = 1 << 1;
+    /// A gap in the sample times re-initialised the filters.
+    pub const DATA_GAP: u16 = 1 << 2;
+    /// A filter failed numerically this sample and was restarted.
+    pub const FILTER_RESET: u16 = 1 << 3;
+    /// At least one input channel is faulted.
+    pub const SENSOR_FAULT: u16 = 1 << 4;
+    /// A leak above the warning level is estimated.
+    pub const LEAK_WARNING: u16 = 1 << 5;
+    /// A leak alarm is latched (cleared only by acknowledgement).
+    pub const ALARM_LATCHED: u16 = 1 << 6;
+    /// Even the best hypothesis fits the data poorly (model mismatch:
+    /// recalibrate).
+    pub const MODEL_MISMATCH: u16 = 1 << 7;
+    /// The sample time did not increase: sample ignored.
+    pub const TIME_NOT_INCREASING: u16 = 1 << 8;
+}
+
+/// Something that happened at this sample.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Event {
+    /// A leak alarm was raised (or escalated) with this verdict.
+    AlarmRaised(Verdict),
+    /// The latched alarm was cleared by acknowledgement.
+    AlarmCleared,
+    /// A channel became untrustworthy.
+    SensorFault(Channel),
+    /// A channel recovered.
+    SensorRecovered(Channel),
+    /// The sample times jumped by more than 5 periods.
+    DataGap,
+    /// A filter failed numerically and was restarted.
+    FilterReset(Hypothesis),
+}
+
+/// Events of one sample (at most a handful).
+pub type Events = heapless::Vec<Event, 8>;
+
+/// The monitor's output for one sample.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Status {
+    /// Sample time, s.
+    pub t_s: f64,
+    /// Verdict: the latched alarm, a sensor fault (which takes precedence),
+    /// or healthy.
+    pub verdict: Verdict,
+    /// The best-supported hypothesis right now, before debounce and latching.
+    pub leading: Hypothesis,
+    /// Estimated internal leak flow, l/min, averaged over the evidence
+    /// window; `None` while no estimate is possible.
+    pub leak_internal_lpm: Option<f32>,
+    /// Estimated external leak flow, l/min (as above).
+    pub leak_external_lpm: Option<f32>,
+    /// 1σ uncertainty of the internal leak flow, l/min.
+    pub leak_internal_sd_lpm: Option<f32>,
+    /// 1σ uncertainty of the external leak flow, l/min.
+    pub leak_external_sd_lpm: Option<f32>,
+    /// Internal leak flow averaged over the (short) detection window, l/min.
+    pub detect_internal_lpm: Option<f32>,
+    /// External leak flow averaged over the detection window, l/min.
+    pub detect_external_lpm: Option<f32>,
+    /// Estimated valve flow-gain deviations from the parameters for the
+    /// extend and retract directions, relative (0.05: the valve passes 5 %
+    /// more than parameterised). A maintenance indicator, and a hint to
+    /// recalibrate when large.
+    pub valve_gain_deviation: [f32; 2],
+    /// How much this sample counts as leak evidence, 0..1: 1 when the plant
+    /// is quasi-steady, near 0 during transients and fast moves.
+    pub evidence_weight: f32,
+    /// Evidence per hypothesis, in `Hypothesis::ALL` order.
+    pub evidence: [Evidence; 4],
+    /// Faulted channels, one bit per `Channel` (`Channel::bit`).
+    pub faulted_channels: u8,
+    /// Health flags (`health::*`).
+    pub health: u16,
+    /// Events at this sample.
+    pub events: Events,
+}
