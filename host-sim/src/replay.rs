@@ -1,0 +1,298 @@
+//! `host-sim replay`: the monitor over a recording, sample by sample,
+//! exactly as the device would see it.
+
+use crate::recording::{RecordingError, RecordingReader};
+use monitor::{Event, Monitor, Params, Real, Sample, Status, Verdict};
+use serde::Serialize;
+use std::io::{BufRead, Write};
+
+/// One entry of the replay's event list (JSON contract: `host-sim-cli.md`).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct EventRecord {
+    /// Sample time, s.
+    pub t: f64,
+    /// `alarm`, `alarm_cleared`, `sensor_fault`, `sensor_recovered`,
+    /// `data_gap` or `filter_reset`.
+    pub kind: &'static str,
+    /// The verdict of an `alarm`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub verdict: Option<&'static str>,
+    /// The channel of a sensor event.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sensor: Option<&'static str>,
+    /// The hypothesis of a `filter_reset`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub hypothesis: Option<&'static str>,
+}
+
+impl EventRecord {
+    fn new(t: f64, e: &Event) -> Self {
+        let mut r = Self {
+            t,
+            kind: "",
+            verdict: None,
+            sensor: None,
+            hypothesis: None,
+        };
+        match *e {
+            Event::AlarmRaised(v) => {
+                r.kind = "alarm";
+                r.verdict = Some(v.name());
+            }
+            Event::AlarmCleared => r.kind = "alarm_cleared",
+            Event::SensorFault(c) => {
+                r.kind = "sensor_fault";
+                r.sensor = Some(c.name());
+            }
+            Event::SensorRecovered(c) => {
+                r.kind = "sensor_recovered";
+                r.sensor = Some(c.name());
+            }
+            Event::DataGap => r.kind = "data_gap",
+            Event::FilterReset(h) => {
+                r.kind = "filter_reset";
+                r.hypothesis = Some(h.name());
+            }
+        }
+        r
+    }
+}
+
+/// The replay result. Field names are a public contract: add, never rename.
+#[derive(Clone, Debug, Serialize)]
+pub struct ReplaySummary {
+    /// The recording's path as given.
+    pub recording: String,
+    /// Samples processed.
+    pub samples: u64,
+    /// Last minus first sample time, s.
+    pub duration_s: f64,
+    /// Verdict at the end of the recording.
+    pub verdict: &'static str,
+    /// Time of the first leak alarm, s.
+    pub first_alarm_s: Option<f64>,
+    /// Internal leak flow estimate at the end, l/min (mean over the last
+    /// seconds of estimation).
+    pub leak_internal_lpm: Option<f64>,
+    /// External leak flow estimate at the end, l/min.
+    pub leak_external_lpm: Option<f64>,
+    /// Alarm, sensor and filter events in time order.
+    pub events: Vec<EventRecord>,
+    /// 1σ of the internal leak estimate, l/min.
+    pub leak_internal_sd_lpm: Option<f64>,
+    /// 1σ of the external leak estimate, l/min.
+    pub leak_external_sd_lpm: Option<f64>,
+    /// The best-supported hypothesis at the end (before debounce/latching).
+    pub leading: &'static str,
+    /// Posterior probabilities at the end: healthy, internal, external, both.
+    pub probabilities: [f64; 4],
+    /// Fraction of samples flagged as model mismatch.
+    pub model_mismatch_fraction: f64,
+}
+
+/// Why a replay stopped.
+#[derive(Debug, thiserror::Error)]
+pub enum ReplayError {
+    /// The recording is malformed.
+    #[error(transparent)]
+    Recording(#[from] RecordingError),
+    /// The parameters are invalid.
+    #[error("{0}")]
+    Params(monitor::params::ParamError),
+    /// Writing the trace failed.
+    #[error("writing the trace: {0}")]
+    Trace(std::io::Error),
+}
+
+/// Per-sample hook (traces, tests).
+pub trait Observer {
+    /// Called after every sample.
+    fn observe(&mut self, sample: &Sample, status: &Status) -> std::io::Result<()>;
+}
+
+impl Observer for () {
+    fn observe(&mut self, _: &Sample, _: &Status) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
+/// A CSV trace of every `every`-th status.
+pub struct TraceWriter<W: Write> {
+    w: W,
+    every: u64,
+    n: u64,
+}
+
+impl<W: Write> TraceWriter<W> {
+    /// Start a trace.
+    pub fn new(mut w: W, every: u64) -> std::io::Result<Self> {
+        writeln!(
+            w,
+            "t,verdict,leading,p_healthy,p_internal,p_external,p_both,nis_healthy,nis_internal,nis_external,nis_both,leak_internal_lpm,leak_external_lpm,detect_internal_lpm,detect_external_lpm,gain_extend,gain_retract,evidence_weight,health"
+        )?;
+        Ok(Self {
+            w,
+            every: every.max(1),
+            n: 0,
+        })
+    }
+}
+
+impl<W: Write> Observer for TraceWriter<W> {
+    fn observe(&mut self, _: &Sample, s: &Status) -> std::io::Result<()> {
+        self.n += 1;
+        if self.n % self.every != 0 {
+            return Ok(());
+        }
+        let e = &s.evidence;
+        writeln!(
+            self.w,
+            "{:.4},{},{},{:.4},{:.4},{:.4},{:.4},{:.2},{:.2},{:.2},{:.2},{},{},{},{},{:.4},{:.4},{:.3},{}",
+            s.t_s,
+            s.verdict.name(),
+            s.leading.name(),
+            e[0].probability,
+            e[1].probability,
+            e[2].probability,
+            e[3].probability,
+            e[0].mean_nis,
+            e[1].mean_nis,
+            e[2].mean_nis,
+            e[3].mean_nis,
+            s.leak_internal_lpm.map_or(String::new(), |v| format!("{v:.4}")),
+            s.leak_external_lpm.map_or(String::new(), |v| format!("{v:.4}")),
+            s.detect_internal_lpm.map_or(String::new(), |v| format!("{v:.4}")),
+            s.detect_external_lpm.map_or(String::new(), |v| format!("{v:.4}")),
+            s.valve_gain_deviation[0],
+            s.valve_gain_deviation[1],
+            s.evidence_weight,
+            s.health
+        )
+    }
+}
+
+/// The nominal sample period: metadata `sample_rate_hz` if present, else
+/// the first time step (so gap detection works at any rate).
+fn sample_period(meta_rate: Option<&str>, first: &Sample, second: Option<&Sample>) -> Option<f64> {
+    if let Some(rate) = meta_rate.and_then(|r| r.trim().parse::<f64>().ok()) {
+        if rate.is_finite() && rate > 0.0 {
+            return Some(1.0 / rate);
+        }
+    }
+    second.map(|s| s.t_s - first.t_s).filter(|d| *d > 0.0)
+}
+
+/// Replay `reader` through a monitor of scalar `T` with `params`.
+pub fn replay<T: Real, R: BufRead>(
+    mut reader: RecordingReader<R>,
+    name: &str,
+    params: &Params,
+    observer: &mut dyn Observer,
+) -> Result<ReplaySummary, ReplayError> {
+    let mut params = params.clone();
+    let first = reader.next().transpose()?;
+    let second = reader.next().transpose()?;
+    if let Some(f) = &first {
+        if let Some(p) = sample_period(reader.meta("sample_rate_hz"), f, second.as_ref()) {
+            params.filter.sample_period_s = p;
+        }
+    }
+    let mut monitor: Monitor<T> = Monitor::new(&params).map_err(ReplayError::Params)?;
+    let mut summary = ReplaySummary {
+        recording: name.to_string(),
+        samples: 0,
+        duration_s: 0.0,
+        verdict: Verdict::Healthy.name(),
+        first_alarm_s: None,
+        leak_internal_lpm: None,
+        leak_external_lpm: None,
+        events: Vec::new(),
+        leak_internal_sd_lpm: None,
+        leak_external_sd_lpm: None,
+        leading: "healthy",
+        probabilities: [0.25; 4],
+        model_mismatch_fraction: 0.0,
+    };
+    let t0 = first.as_ref().map(|s| s.t_s);
+    let mut mismatch = 0u64;
+    let head = first.into_iter().chain(second).map(Ok);
+    for sample in head.chain(reader) {
+        let sample = sample?;
+        let status = monitor.step(&sample);
+        observer
+            .observe(&sample, &status)
+            .map_err(ReplayError::Trace)?;
+        summary.samples += 1;
+        summary.duration_s = sample.t_s - t0.unwrap_or(sample.t_s);
+        summary.verdict = status.verdict.name();
+        summary.leading = status.leading.name();
+        summary.probabilities = status.evidence.map(|e| round4(e.probability as f64));
+        if status.health & monitor::status::health::MODEL_MISMATCH != 0 {
+            mismatch += 1;
+        }
+        if let (Some(i), Some(e)) = (status.leak_internal_lpm, status.leak_external_lpm) {
+            summary.leak_internal_lpm = Some(round4(i as f64));
+            summary.leak_external_lpm = Some(round4(e as f64));
+            summary.leak_internal_sd_lpm = status.leak_internal_sd_lpm.map(|v| round4(v as f64));
+            summary.leak_external_sd_lpm = status.leak_external_sd_lpm.map(|v| round4(v as f64));
+        }
+        for e in &status.events {
+            if matches!(e, Event::AlarmRaised(_)) && summary.first_alarm_s.is_none() {
+                summary.first_alarm_s = Some(sample.t_s);
+            }
+            summary.events.push(EventRecord::new(sample.t_s, e));
+        }
+    }
+    summary.model_mismatch_fraction = mismatch as f64 / summary.samples.max(1) as f64;
+    Ok(summary)
+}
+
+fn round4(v: f64) -> f64 {
+    (v * 1e4).round() / 1e4
+}
+
+/// Human-readable summary.
+pub fn print_summary(s: &ReplaySummary, out: &mut dyn Write) -> std::io::Result<()> {
+    writeln!(out, "recording   {}", s.recording)?;
+    writeln!(out, "samples     {} over {:.3} s", s.samples, s.duration_s)?;
+    writeln!(out, "verdict     {}", s.verdict.to_uppercase())?;
+    match s.first_alarm_s {
+        Some(t) => writeln!(out, "first alarm at t = {t:.3} s")?,
+        None => writeln!(out, "no leak alarm")?,
+    }
+    let fmt = |v: Option<f64>, sd: Option<f64>| match (v, sd) {
+        (Some(v), Some(sd)) => format!("{v:.3} l/min (±{sd:.3})"),
+        (Some(v), None) => format!("{v:.3} l/min"),
+        _ => "n/a".to_string(),
+    };
+    writeln!(
+        out,
+        "leak size   internal {}, external {}",
+        fmt(s.leak_internal_lpm, s.leak_internal_sd_lpm),
+        fmt(s.leak_external_lpm, s.leak_external_sd_lpm)
+    )?;
+    let p = s.probabilities;
+    writeln!(
+        out,
+        "evidence    leading {}; P(healthy) {:.3}, P(internal) {:.3}, P(external) {:.3}, P(both) {:.3}",
+        s.leading, p[0], p[1], p[2], p[3]
+    )?;
+    if s.model_mismatch_fraction > 0.01 {
+        writeln!(
+            out,
+            "warning     the model fits poorly on {:.0} % of samples: calibrate this installation (host-sim calibrate)",
+            100.0 * s.model_mismatch_fraction
+        )?;
+    }
+    if !s.events.is_empty() {
+        writeln!(out, "events")?;
+        for e in s.events.iter().take(50) {
+            let what = e.verdict.or(e.sensor).or(e.hypothesis).unwrap_or("");
+            writeln!(out, "  {:>10.3} s  {} {}", e.t, e.kind, what)?;
+        }
+        if s.events.len() > 50 {
+            writeln!(out, "  … {} more", s.events.len() - 50)?;
+        }
+    }
+    Ok(())
+}
