@@ -1,0 +1,194 @@
+//! The command line as scripts use it: exit codes, error messages that
+//! name file, line and column, the replay JSON contract, the examples.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn host_sim(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_host-sim"))
+        .args(args)
+        .output()
+        .expect("host-sim runs")
+}
+
+fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+const HEADER: &str = "t,p_supply,p_piston,p_rod,p_tank,x_piston,u_valve\n";
+const ROW0: &str = "0.000,50.0,21.4,12.9,0.8,0.0412,0.0\n";
+
+fn assert_rejected(body: &str, must_contain: &[&str]) {
+    let dir = tempfile::tempdir().unwrap();
+    let p = write(dir.path(), "bad.csv", body);
+    let out = host_sim(&["replay", p.to_str().unwrap(), "--json"]);
+    assert!(!out.status.success(), "malformed recording accepted");
+    assert!(
+        out.stdout.is_empty(),
+        "partial output on stdout: {}",
+        String::from_utf8_lossy(&out.stdout)
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("bad.csv"),
+        "error does not name the file: {err}"
+    );
+    for s in must_contain {
+        assert!(err.contains(s), "error does not contain `{s}`: {err}");
+    }
+}
+
+#[test]
+fn missing_column_is_an_error_naming_it() {
+    assert_rejected(
+        "t,p_supply,p_piston,p_tank,x_piston,u_valve\n0,50,21,1,0.04,0\n",
+        &[":1:", "`p_rod`"],
+    );
+}
+
+#[test]
+fn bad_number_is_an_error_naming_line_and_column() {
+    let body = format!("{HEADER}{ROW0}0.001,50.0,21.4,12.9,0.8,0.04x2,0.0\n");
+    assert_rejected(&body, &[":3:", "column 6 `x_piston`", "0.04x2"]);
+}
+
+#[test]
+fn time_going_backwards_is_an_error() {
+    let body = format!(
+        "{HEADER}{ROW0}0.002,50.0,21.4,12.9,0.8,0.0412,0.0\n0.001,50.0,21.4,12.9,0.8,0.0412,0.0\n"
+    );
+    assert_rejected(&body, &[":4:", "`t`", "does not increase"]);
+}
+
+#[test]
+fn nan_is_an_error() {
+    let body = format!("{HEADER}{ROW0}0.001,50.0,NaN,12.9,0.8,0.0412,0.0\n");
+    assert_rejected(
+        &body,
+        &[":3:", "column 3 `p_piston`", "not a finite number"],
+    );
+}
+
+#[test]
+fn unreadable_file_is_an_error() {
+    let out = host_sim(&["replay", "/nonexistent/run.csv", "--json"]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("/nonexistent/run.csv"));
+}
+
+#[test]
+fn bad_params_file_is_an_error_naming_the_field() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = write(dir.path(), "ok.csv", &format!("{HEADER}{ROW0}"));
+    let params = write(dir.path(), "p.toml", "[valve]\ndead_zone = -1.0\n");
+    let out = host_sim(&[
+        "replay",
+        rec.to_str().unwrap(),
+        "--params",
+        params.to_str().unwrap(),
+    ]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("p.toml") && err.contains("valve.dead_zone"),
+        "{err}"
+    );
+}
+
+/// Field names are a contract (`host-sim-cli.md`): present, with the
+/// documented types.
+#[test]
+fn replay_json_has_the_contract_fields() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut body = String::from(HEADER);
+    for k in 0..3000 {
+        body += &format!("{:.3},50.0,26.2,24.9,0.6,0.0400,0.0\n", k as f64 * 0.001);
+    }
+    body += "3.000,50.0,,24.9,0.6,0.0400,0.0\n";
+    let rec = write(dir.path(), "rest.csv", &body);
+    let out = host_sim(&["replay", rec.to_str().unwrap(), "--json"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert_eq!(text.trim().lines().count(), 1, "exactly one JSON object");
+    let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    assert!(v["recording"].as_str().unwrap().ends_with("rest.csv"));
+    assert_eq!(v["samples"], 3001);
+    assert!((v["duration_s"].as_f64().unwrap() - 3.0).abs() < 1e-9);
+    // The last sample has no piston pressure: a sensor fault, not healthy.
+    assert_eq!(v["verdict"], "sensor_fault");
+    assert!(v["first_alarm_s"].is_null());
+    assert!(v.get("leak_internal_lpm").is_some() && v.get("leak_external_lpm").is_some());
+    let events = v["events"].as_array().unwrap();
+    assert_eq!(events.len(), 1);
+    assert_eq!(events[0]["kind"], "sensor_fault");
+    assert_eq!(events[0]["sensor"], "p_piston");
+    assert!((events[0]["t"].as_f64().unwrap() - 3.0).abs() < 1e-9);
+}
+
+#[test]
+fn human_summary_without_json() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = write(dir.path(), "ok.csv", &format!("{HEADER}{ROW0}"));
+    let out = host_sim(&["replay", rec.to_str().unwrap()]);
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("verdict") && text.contains("HEALTHY"),
+        "{text}"
+    );
+}
+
+/// The committed examples (README's first command) give their verdicts.
+#[test]
+fn example_recordings_give_their_verdicts() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples");
+    for (file, want) in [
+        ("healthy.csv.gz", "healthy"),
+        ("internal.csv.gz", "internal"),
+        ("external.csv.gz", "external"),
+        ("both.csv.gz", "both"),
+    ] {
+        let p = root.join(file);
+        let out = host_sim(&["replay", p.to_str().unwrap(), "--json"]);
+        assert!(
+            out.status.success(),
+            "{file}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        assert_eq!(v["verdict"], want, "{file}");
+    }
+}
+
+#[test]
+fn simulate_writes_a_recording_replay_reads() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("sim.csv");
+    let out = host_sim(&[
+        "simulate",
+        "-o",
+        p.to_str().unwrap(),
+        "--duration",
+        "2",
+        "--with-temp",
+        "--temp",
+        "40",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = std::fs::read_to_string(&p).unwrap();
+    assert!(text.starts_with("# format=leak-recording/1\n"));
+    assert!(text.contains("t,p_supply,p_piston,p_rod,p_tank,x_piston,u_valve,temp_oil,q_internal_lpm,q_external_lpm\n"));
+    assert_eq!(text.lines().filter(|l| !l.starts_with('#')).count(), 2001);
+    let out = host_sim(&["replay", p.to_str().unwrap(), "--json"]);
+    assert!(out.status.success());
+}

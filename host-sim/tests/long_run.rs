@@ -1,0 +1,55 @@
+//! One hour of a healthy rig at 1 kHz in f32: everything stays finite, the
+//! covariances PSD, and no alarm is raised. Takes a few minutes:
+//! `cargo test --release -p host-sim --test long_run -- --ignored`
+
+use host_sim::sim::{Profile, Rig, Scenario, Simulation};
+use monitor::{Monitor, Params, Verdict};
+use nalgebra::DMatrix;
+
+fn min_eig<const N: usize>(p: &nalgebra::SMatrix<f32, N, N>) -> f64 {
+    assert!(p.iter().all(|v| v.is_finite()), "non-finite covariance");
+    let d = DMatrix::from_fn(N, N, |i, j| p[(i, j)] as f64);
+    d.symmetric_eigen().eigenvalues.min()
+}
+
+#[test]
+#[ignore = "one simulated hour: run with --release -- --ignored"]
+fn one_hour_healthy_stays_finite_psd_and_silent() {
+    let sc = Scenario {
+        duration_s: 3600.0,
+        profile: Profile::Random,
+        seed: 77,
+        ..Scenario::default()
+    };
+    let mut m: Monitor<f32> = Monitor::new(&Params::nominal()).unwrap();
+    let mut worst = f64::MAX;
+    let mut n = 0u64;
+    for row in Simulation::new(sc, Rig::nominal()) {
+        let s = m.step(&row.sample);
+        assert_eq!(s.verdict, Verdict::Healthy, "alarm at t = {}", s.t_s);
+        assert!(
+            s.events.is_empty(),
+            "event at t = {}: {:?}",
+            s.t_s,
+            s.events
+        );
+        if let Some(v) = s.leak_internal_lpm {
+            assert!(v.is_finite() && s.leak_external_lpm.unwrap().is_finite());
+        }
+        n += 1;
+        if n % 60_000 == 0 {
+            let b = m.bank().unwrap();
+            for e in [
+                min_eig(&b.healthy.ekf.p),
+                min_eig(&b.internal.ekf.p),
+                min_eig(&b.external.ekf.p),
+                min_eig(&b.both.ekf.p),
+            ] {
+                worst = worst.min(e);
+                assert!(e > -1e-9, "covariance not PSD at t = {}: {e}", s.t_s);
+            }
+        }
+    }
+    assert_eq!(n, 3_600_000);
+    println!("1 h healthy: no alarm, smallest covariance eigenvalue {worst:.3e}");
+}

@@ -1,0 +1,142 @@
+//! Numerical behaviour of the same filter code: f32 against its f64
+//! reference, determinism, faults and gaps, and covariance health.
+
+mod common;
+use common::scenario;
+use host_sim::sim::{Rig, Simulation};
+use monitor::{Event, Monitor, Params, Sample, Status, Verdict};
+
+fn samples(internal: f64, external: f64, seed: u64) -> Vec<Sample> {
+    Simulation::new(
+        scenario(50.0, internal, external, 0.0, seed),
+        Rig::nominal(),
+    )
+    .map(|r| r.sample)
+    .collect()
+}
+
+fn replay<T: monitor::Real>(s: &[Sample]) -> Vec<Status> {
+    let mut m: Monitor<T> = Monitor::new(&Params::nominal()).unwrap();
+    s.iter().map(|x| m.step(x)).collect()
+}
+
+#[test]
+fn f32_filter_agrees_with_its_f64_reference() {
+    let s = samples(0.4, 0.0, 31);
+    let a = replay::<f32>(&s);
+    let b = replay::<f64>(&s);
+    let last = (a.last().unwrap(), b.last().unwrap());
+    assert_eq!(last.0.verdict, last.1.verdict);
+    for (x, y) in [
+        (last.0.leak_internal_lpm, last.1.leak_internal_lpm),
+        (last.0.leak_external_lpm, last.1.leak_external_lpm),
+    ] {
+        let (x, y) = (x.unwrap(), y.unwrap());
+        assert!((x - y).abs() < 0.01, "f32 {x} vs f64 {y} l/min");
+    }
+    // The size estimates track each other throughout, not just at the end.
+    let worst = a
+        .iter()
+        .zip(&b)
+        .filter_map(|(p, q)| Some((p.leak_internal_lpm? - q.leak_internal_lpm?).abs()))
+        .fold(0.0f32, f32::max);
+    assert!(
+        worst < 0.02,
+        "f32 and f64 size estimates differ by up to {worst} l/min"
+    );
+}
+
+#[test]
+fn same_input_same_output_bit_for_bit() {
+    let s = samples(0.0, 0.3, 32);
+    assert_eq!(replay::<f32>(&s), replay::<f32>(&s));
+}
+
+#[test]
+fn a_missing_reading_is_a_sensor_fault_never_healthy_nor_a_leak() {
+    let mut s = samples(0.0, 0.0, 33);
+    for x in &mut s[20_000..20_500] {
+        x.p_rod_bar = None;
+    }
+    let st = replay::<f32>(&s);
+    assert_eq!(st[20_000].verdict, Verdict::SensorFault);
+    assert!(st[20_000]
+        .events
+        .contains(&Event::SensorFault(monitor::Channel::PRod)));
+    assert!(st[20_000..20_500]
+        .iter()
+        .all(|x| x.verdict == Verdict::SensorFault));
+    assert!(st[20_500]
+        .events
+        .contains(&Event::SensorRecovered(monitor::Channel::PRod)));
+    assert!(
+        st.iter().all(|x| !x.verdict.is_leak()),
+        "fault reported as a leak"
+    );
+}
+
+#[test]
+fn a_sensor_fault_takes_precedence_over_a_latched_alarm() {
+    let mut s = samples(0.5, 0.0, 34);
+    let n = s.len();
+    for x in &mut s[n - 100..] {
+        x.x_piston_m = Some(9.0); // implausible: far outside the stroke
+    }
+    let st = replay::<f32>(&s);
+    assert!(st[n - 101].verdict.is_leak());
+    assert_eq!(st[n - 1].verdict, Verdict::SensorFault);
+}
+
+#[test]
+fn a_gap_in_time_restarts_the_filters() {
+    let mut s = samples(0.0, 0.0, 35);
+    for x in &mut s[30_000..] {
+        x.t_s += 1.0;
+    }
+    let st = replay::<f32>(&s);
+    assert!(st[30_000].events.contains(&Event::DataGap));
+    assert!(st.iter().all(|x| x.verdict == Verdict::Healthy));
+}
+
+#[test]
+fn covariances_stay_symmetric_positive_definite() {
+    let s = samples(0.3, 0.3, 36);
+    let mut m: Monitor<f32> = Monitor::new(&Params::nominal()).unwrap();
+    for (k, x) in s.iter().enumerate() {
+        m.step(x);
+        if k % 5000 == 4999 {
+            common_psd::check(&m);
+        }
+    }
+}
+
+mod common_psd {
+    use monitor::Monitor;
+    use nalgebra::DMatrix;
+
+    fn min_eig<const N: usize>(p: &nalgebra::SMatrix<f32, N, N>) -> f64 {
+        for i in 0..N {
+            for j in 0..N {
+                assert_eq!(p[(i, j)], p[(j, i)], "P not symmetric");
+                assert!(p[(i, j)].is_finite());
+            }
+        }
+        let d = DMatrix::from_fn(N, N, |i, j| p[(i, j)] as f64);
+        d.symmetric_eigen().eigenvalues.min()
+    }
+
+    /// Every filter's covariance: finite, symmetric, PSD (eigenvalues above
+    /// −1e-9 relative to the largest diagonal entry).
+    pub fn check(m: &Monitor<f32>) {
+        let b = m.bank().expect("filters running");
+        let mins = [
+            min_eig(&b.healthy.ekf.p),
+            min_eig(&b.internal.ekf.p),
+            min_eig(&b.external.ekf.p),
+            min_eig(&b.both.ekf.p),
+        ];
+        for (i, e) in mins.iter().enumerate() {
+            assert!(*e > -1e-9, "filter {i}: min eigenvalue {e}");
+        }
+    }
+}
