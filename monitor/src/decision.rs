@@ -5,12 +5,16 @@
 //! 1. **Leak size.** The `both` filter carries the internal and external
 //!    leak coefficients as states; their flows at the current pressures,
 //!    θ·|Δp|/10 bar, are averaged twice: over `detection_window_s` for
-//!    detection and over `evidence_window_s` for the reported size. A leak
-//!    is *present* when its fast average exceeds the alarm level; a leaky
-//!    persistence counter (a CUSUM on the indicator "above the alarm level")
-//!    must reach `debounce_s` before the alarm is raised. Alarms latch until
-//!    acknowledged; a new leak while one is latched escalates the verdict
-//!    (internal + external = both).
+//!    detection and over `evidence_window_s` for the reported size. Each
+//!    leak has a CUSUM on the relative excess of its fast average F over
+//!    the alarm level A, in evidence time: g ← max(0, g + w·dt·(F − A)/A),
+//!    the excess clipped to [−1, 4]. The alarm is raised when g reaches
+//!    `debounce_s`: after 1 s at twice the alarm level, ¼ s at five times,
+//!    5 s at 1.2 times; a reading that only touches the level never
+//!    alarms. Alarms latch until acknowledged; a new leak while one is
+//!    latched escalates the verdict (internal + external = both). The
+//!    warning flag has hysteresis: on at `warning_lpm`, off below 80 % of
+//!    it.
 //!
 //! 2. **Model probabilities.** Each filter's log-likelihood, tempered by the
 //!    residual correlation time (consecutive residuals of a physical model
@@ -154,16 +158,15 @@ impl<T: Real> Decision<T> {
         }
         self.update_probabilities(out, dt_w, weight, a_evidence);
 
-        // Size test with persistence, per leak.
+        // CUSUM on the relative excess over the alarm level, per leak.
         let mut new_leak = [false; 2];
         for k in 0..2 {
-            let above = self.fast[k] >= self.alarm_lpm && self.supports(k);
-            self.persist[k] = if above {
-                self.persist[k] + dt_w
+            let excess = if self.supports(k) {
+                ((self.fast[k] - self.alarm_lpm) / self.alarm_lpm).clamp_to(-T::ONE, T::c(4.0))
             } else {
-                // Leaky: a brief dip does not restart the count.
-                (self.persist[k] - dt_w - dt_w).max(T::ZERO)
+                -T::ONE
             };
+            self.persist[k] = (self.persist[k] + excess * dt_w).max(T::ZERO);
             if self.persist[k] >= self.debounce_s && !self.raised[k] {
                 self.raised[k] = true;
                 new_leak[k] = true;
@@ -182,8 +185,10 @@ impl<T: Real> Decision<T> {
                 let _ = events.push(Event::AlarmRaised(merged));
             }
         }
-        self.warning = (self.slow[0] >= self.warning_lpm || self.slow[1] >= self.warning_lpm)
-            && !self.latched.is_leak();
+        let level = self.slow[0].max(self.slow[1]);
+        let off = self.warning_lpm * T::c(0.8);
+        self.warning = !self.latched.is_leak()
+            && (level >= self.warning_lpm || (self.warning && level >= off));
         self.mismatch = self.nis[self.leading as usize] > T::c(MISMATCH_NIS);
         let paused = if weight < T::c(0.5) {
             health::EVIDENCE_PAUSED

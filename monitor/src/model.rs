@@ -151,7 +151,7 @@ pub struct Eval<T> {
     pub jac: Jacobian<T>,
     /// Internal leak flow beyond the healthy seal leakage, m³/s.
     pub q_internal: T,
-    /// External leak flow, m³/s.
+    /// External leak flow beyond the healthy baseline, m³/s.
     pub q_external: T,
     /// Metering flow through the valve into the piston chamber, m³/s.
     pub q_valve_a: T,
@@ -172,6 +172,9 @@ pub struct Plant<T> {
     two_zeta: T,
     kv_ext: T,
     kv_ret: T,
+    rod_edge_ext: T,
+    rod_edge_ret: T,
+    k_ext_base: T,
     dead_zone: T,
     null_offset: T,
     open_eps: T,
@@ -208,6 +211,9 @@ impl<T: Real> Plant<T> {
             two_zeta: T::c(2.0 * v.damping_ratio),
             kv_ext: T::c(kv(v.flow_gain_extend_lpm_sqrt_bar)),
             kv_ret: T::c(kv(v.flow_gain_retract_lpm_sqrt_bar)),
+            rod_edge_ext: T::c(v.rod_edge_gain_extend),
+            rod_edge_ret: T::c(v.rod_edge_gain_retract),
+            k_ext_base: T::c(lam(params.leakage.external_lpm_per_bar)),
             dead_zone: T::c(v.dead_zone),
             null_offset: T::c(v.null_offset),
             open_eps: T::c(OPENING_ROUNDING),
@@ -246,9 +252,8 @@ impl<T: Real> Plant<T> {
         let sign = v / root;
         let dsign = self.v_smooth2 / (root * root * root);
         let y = self.c_stribeck * v.abs();
-        let poly = T::ONE + y * (T::ONE + y * (T::c(0.5) + y * T::c(1.0 / 6.0)));
-        let decay = T::ONE / poly;
-        // d(decay)/dv = −poly'·c·sgn(v)/poly².
+        let decay = stribeck_decay(y);
+        // decay = 1/poly: d(decay)/d|v| = −poly'·c·decay².
         let dpoly = T::ONE + y * (T::ONE + y * T::c(0.5));
         let ddecay_dabsv = -(dpoly * self.c_stribeck) * decay * decay;
         let magnitude = self.f_coulomb + self.f_stribeck * decay;
@@ -313,10 +318,14 @@ impl<T: Real> Plant<T> {
         let kv_ext = self.kv_ext * (T::ONE + nuis.gain_extend * gref);
         let kv_ret = self.kv_ret * (T::ONE + nuis.gain_retract * gref);
         // Metering flows of each direction (into A, into B).
+        // The rod-side edges (B→T, P→B) may pass a little more or less than
+        // the piston-side edges of the same direction (calibrated ratios).
+        let kv_ext_b = kv_ext * self.rod_edge_ext;
+        let kv_ret_b = kv_ret * self.rod_edge_ret;
         let ext_a = kv_ext * a_pos * g_pa;
-        let ext_b = -(kv_ext * a_pos * g_bt);
+        let ext_b = -(kv_ext_b * a_pos * g_bt);
         let ret_a = -(kv_ret * a_neg * g_at);
-        let ret_b = kv_ret * a_neg * g_pb;
+        let ret_b = kv_ret_b * a_neg * g_pb;
         let q_a = ext_a + ret_a + k_edge * (p2 + p5 - p3 - p3);
         let q_b = ext_b + ret_b + k_edge * (p2 + p5 - p4 - p4);
 
@@ -324,7 +333,8 @@ impl<T: Real> Plant<T> {
         let leak_unit = T::c(LEAK_UNIT);
         let k_int_extra = leaks.internal * leak_unit;
         let k_int = self.k_seal * u.laminar_factor + k_int_extra;
-        let k_ext = leaks.external * leak_unit;
+        let k_ext_extra = leaks.external * leak_unit;
+        let k_ext = self.k_ext_base * u.laminar_factor + k_ext_extra;
         let dp_int = p3 - p4;
         let dp_ext = p4 - p5;
         let q_i = k_int * dp_int;
@@ -349,9 +359,9 @@ impl<T: Real> Plant<T> {
         let dp4 = cb * flow_b;
 
         let dqa_dxv = kv_ext * da_pos * g_pa + kv_ret * da_neg * g_at;
-        let dqb_dxv = -(kv_ret * da_neg * g_pb) - kv_ext * da_pos * g_bt;
+        let dqb_dxv = -(kv_ret_b * da_neg * g_pb) - kv_ext_b * da_pos * g_bt;
         let dqa_dp3 = -(kv_ext * a_pos * dg_pa) - kv_ret * a_neg * dg_at - k_edge - k_edge;
-        let dqb_dp4 = -(kv_ret * a_neg * dg_pb) - kv_ext * a_pos * dg_bt - k_edge - k_edge;
+        let dqb_dp4 = -(kv_ret_b * a_neg * dg_pb) - kv_ext_b * a_pos * dg_bt - k_edge - k_edge;
         // Gains: each direction's metering flows scale with its gain.
         let dge = self.kv_ext * gref / kv_ext;
         let dgr = self.kv_ret * gref / kv_ret;
@@ -398,7 +408,7 @@ impl<T: Real> Plant<T> {
             f,
             jac,
             q_internal: k_int_extra * dp_int,
-            q_external: q_e,
+            q_external: k_ext_extra * dp_ext,
             q_valve_a: ext_a + ret_a,
         }
     }
@@ -477,6 +487,13 @@ impl<T: Real> Plant<T> {
     }
 }
 
+/// The model's Stribeck decay for y = c_v·|v|: 1/(1 + y + y²/2 + y³/6), a
+/// cheap stand-in for e^(−y) (within 2 % for y < 1, where the term matters).
+#[inline]
+pub fn stribeck_decay<T: Real>(y: T) -> T {
+    T::ONE / (T::ONE + y * (T::ONE + y * (T::c(0.5) + y * T::c(1.0 / 6.0))))
+}
+
 /// One prediction step: its length and how it is integrated.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Step<T> {
@@ -502,6 +519,15 @@ mod tests {
 
     fn plant() -> Plant<f64> {
         Plant::new(&Params::nominal())
+    }
+
+    /// A plant with every optional term active (for the Jacobian check).
+    fn plant_all_terms() -> Plant<f64> {
+        let mut p = Params::nominal();
+        p.valve.rod_edge_gain_extend = 1.03;
+        p.valve.rod_edge_gain_retract = 0.97;
+        p.leakage.external_lpm_per_bar = 2e-3;
+        Plant::new(&p)
     }
 
     fn inputs(u: f64) -> Inputs<f64> {
@@ -571,7 +597,7 @@ mod tests {
 
     #[test]
     fn analytic_jacobian_matches_finite_differences() {
-        let p = plant();
+        let p = plant_all_terms();
         let leaks = Leaks {
             internal: 0.4,
             external: 0.3,

@@ -121,6 +121,11 @@ params_struct! {
         pub dead_zone: f64 = 0.015,
         /// Spool position at zero command (null bias), fraction of travel.
         pub null_offset: f64 = 0.0,
+        /// Flow gain of the B→T edge relative to the P→A edge (both open for
+        /// positive travel). Fitted by calibration.
+        pub rod_edge_gain_extend: f64 = 1.0,
+        /// Flow gain of the P→B edge relative to the A→T edge.
+        pub rod_edge_gain_retract: f64 = 1.0,
         /// Laminar leakage across each of the four covered metering edges
         /// (P→A, A→T, P→B, B→T), l/min per bar. The thesis' per-edge values
         /// of §6.3.1.2 give litres per minute at rest (erratum 2); its
@@ -182,6 +187,11 @@ params_struct! {
         /// §6.3.3 gives K_Lp = 1e-12 m³/(s·Pa) = 6e-3 l/min/bar; the
         /// nomenclature's 2.32e-9 would be > 100 l/min (erratum 1).
         pub seal_lpm_per_bar: f64 = 6.0e-3,
+        /// Baseline leakage from the rod side to tank, l/min per bar (e.g.
+        /// a valve that leaks a little more on one side). Set by
+        /// calibration so that a healthy installation reads zero; may be
+        /// slightly negative as a correction of the valve's edge leakage.
+        pub external_lpm_per_bar: f64 = 0.0,
     }
 }
 
@@ -228,7 +238,7 @@ params_struct! {
         /// Prior 1σ of each valve flow-gain deviation (relative).
         pub gain_prior: f64 = 0.08,
         /// Random-walk intensity of each leak coefficient, (l/min at 10 bar)²/s.
-        pub q_leak: f64 = 2.0e-5,
+        pub q_leak: f64 = 5.0e-3,
         /// Prior 1σ of each leak coefficient, l/min at 10 bar.
         pub leak_prior_lpm: f64 = 0.1,
         /// Time constant of the evidence memory and of the reported leak
@@ -319,7 +329,7 @@ impl Params {
     /// Check that every value is finite and physically meaningful. Returns
     /// the first offending field's name.
     pub fn validate(&self) -> Result<(), ParamError> {
-        let positive: [(&'static str, f64); 18] = [
+        let positive: [(&'static str, f64); 20] = [
             ("cylinder.piston_area_m2", self.cylinder.piston_area_m2),
             ("cylinder.rod_side_area_m2", self.cylinder.rod_side_area_m2),
             ("cylinder.stroke_m", self.cylinder.stroke_m),
@@ -333,6 +343,14 @@ impl Params {
             ),
             ("load.gravity_scale", self.load.gravity_scale),
             ("load.inertia_scale", self.load.inertia_scale),
+            (
+                "valve.rod_edge_gain_extend",
+                self.valve.rod_edge_gain_extend,
+            ),
+            (
+                "valve.rod_edge_gain_retract",
+                self.valve.rod_edge_gain_retract,
+            ),
             (
                 "valve.natural_frequency_rad_s",
                 self.valve.natural_frequency_rad_s,
@@ -417,6 +435,13 @@ impl Params {
                     problem: "must be a finite number",
                 });
             }
+        }
+        let ext = self.leakage.external_lpm_per_bar;
+        if !(ext.is_finite() && ext > -0.01 && ext < 1.0) {
+            return Err(ParamError {
+                field: "leakage.external_lpm_per_bar",
+                problem: "must be finite, > -0.01 and < 1",
+            });
         }
         if !(self.fluid.air_fraction < 0.5) {
             return Err(ParamError {
