@@ -3,7 +3,7 @@
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
-use host_sim::eval::{self, Case, Nominal};
+use host_sim::eval::{self, Case, EvalConfig};
 use host_sim::recording::{RecordingReader, RecordingWriter};
 use host_sim::replay::{print_summary, replay, TraceWriter};
 use host_sim::sim::{perturbed_rig, LeakLaw, Profile, Rig, Scenario, Simulation};
@@ -46,6 +46,18 @@ enum Command {
         /// Run the f64 reference build of the filter instead of f32.
         #[arg(long)]
         f64: bool,
+    },
+    /// Fit an installation's parameters from a leak-free recording of it.
+    Calibrate {
+        /// A recording of the installation known to be healthy (a minute or
+        /// more of holds and moves in both directions).
+        recording: PathBuf,
+        /// Where to write the parameters (TOML).
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Start from these parameters instead of the reference rig's.
+        #[arg(long)]
+        params: Option<PathBuf>,
     },
     /// Simulate the rig and write a recording.
     Simulate {
@@ -92,6 +104,9 @@ enum Command {
         /// Omit the truth columns (q_internal_lpm, q_external_lpm).
         #[arg(long)]
         no_truth: bool,
+        /// Also write the simulated rig's true plant parameters (TOML) here.
+        #[arg(long)]
+        dump_rig: Option<PathBuf>,
     },
     /// Simulate a matrix of rigs, conditions and leaks and tabulate how the
     /// monitor does.
@@ -105,36 +120,50 @@ enum Command {
         /// Leak kinds: healthy, internal, external, both.
         #[arg(long, value_delimiter = ',', default_values_t = ["healthy".to_string(), "internal".to_string(), "external".to_string(), "both".to_string()])]
         kinds: Vec<String>,
-        /// Leak sizes, l/min.
+        /// Leak sizes, l/min (mean flow after onset).
         #[arg(long, value_delimiter = ',', default_values_t = [0.03, 0.05, 0.1, 0.2, 0.3, 0.5, 1.0])]
         sizes: Vec<f64>,
         /// Leak onsets, s (0 = from the start).
         #[arg(long, value_delimiter = ',', default_values_t = [0.0, 30.0])]
         onsets: Vec<f64>,
+        /// Healthy runs per rig and condition.
+        #[arg(long, default_value_t = 1)]
+        healthy_runs: u64,
         /// Number of rig variations.
         #[arg(long, default_value_t = 3)]
         rigs: u64,
         /// First rig seed.
         #[arg(long, default_value_t = 1)]
         first_rig: u64,
-        /// Use the nominal rig as rig 0.
+        /// Use the reference rig itself as rig 0.
         #[arg(long)]
         nominal_rig: bool,
+        /// Give the monitor the nominal parameters instead of calibrating
+        /// each rig from its own healthy recording.
+        #[arg(long)]
+        no_calibration: bool,
+        /// Write the oil temperature column: never, always, or both (each
+        /// case twice).
+        #[arg(long, default_value = "never")]
+        temp_column: String,
         /// Run length, s.
         #[arg(long, default_value_t = 60.0)]
         duration: f64,
-        /// Motion profile.
+        /// Motion profile: thesis, random, steps, hold.
         #[arg(long, default_value = "thesis")]
         profile: String,
-        /// Leak flow law.
+        /// Leak flow law: laminar or orifice.
         #[arg(long, default_value = "laminar")]
         law: String,
-        /// Monitor parameters for every rig (default nominal).
+        /// Monitor parameters to start from (default nominal).
         #[arg(long)]
         params: Option<PathBuf>,
         /// Worker threads.
         #[arg(long, default_value_t = 2)]
         threads: usize,
+        /// Cache simulated recordings and calibrations here (re-runs replay).
+        #[arg(long)]
+        cache: Option<PathBuf>,
         /// Write every run's result as JSON lines here.
         #[arg(long)]
         out: Option<PathBuf>,
@@ -219,20 +248,43 @@ fn run(cli: Cli) -> Result<ExitCode> {
             }
             Ok(ExitCode::SUCCESS)
         }
+        Command::Calibrate {
+            recording,
+            output,
+            params,
+        } => {
+            let start = match &params {
+                Some(p) => host_sim::load_params(p)?,
+                None => Params::nominal(),
+            };
+            let samples = host_sim::read_all(&recording)?;
+            let cal = host_sim::calibrate::calibrate(&samples, &start)
+                .with_context(|| format!("{}", recording.display()))?;
+            print!("{}", cal.report());
+            let text = cal.to_toml(&recording.display().to_string())?;
+            std::fs::write(&output, text)
+                .with_context(|| format!("{}: cannot write", output.display()))?;
+            println!("parameters written to {}", output.display());
+            Ok(ExitCode::SUCCESS)
+        }
         Command::Eval {
             supply,
             temp,
             kinds,
             sizes,
             onsets,
+            healthy_runs,
             rigs,
             first_rig,
             nominal_rig,
+            no_calibration,
+            temp_column,
             duration,
             profile,
             law,
             params,
             threads,
+            cache,
             out,
         } => {
             let params = match &params {
@@ -255,30 +307,45 @@ fn run(cli: Cli) -> Result<ExitCode> {
                 "hold" => "hold",
                 p => anyhow::bail!("unknown profile `{p}`"),
             };
-            let law: &'static str = if law == "orifice" {
-                "orifice"
-            } else {
-                "laminar"
+            let law: &'static str = match law.as_str() {
+                "laminar" => "laminar",
+                "orifice" => "orifice",
+                l => anyhow::bail!("unknown leak law `{l}`"),
+            };
+            let temp_columns: &[bool] = match temp_column.as_str() {
+                "never" => &[false],
+                "always" => &[true],
+                "both" => &[false, true],
+                t => anyhow::bail!("--temp-column must be never, always or both, not `{t}`"),
             };
             let mut cases = Vec::new();
-            let mut seed = 1000;
             for rig in first_rig..first_rig + rigs {
                 for &sup in &supply {
                     for &tc in &temp {
-                        for k in &kinds {
-                            let kind = kind_name(k)?;
-                            let (sz, on): (&[f64], &[f64]) = if kind == "healthy" {
-                                (&[0.0], &[0.0])
-                            } else {
-                                (&sizes, &onsets)
-                            };
-                            for &size in sz {
-                                for &onset in on {
-                                    seed += 1;
+                        for &with_temp in temp_columns {
+                            for k in &kinds {
+                                let kind = kind_name(k)?;
+                                let runs: Vec<(f64, f64, u64)> = if kind == "healthy" {
+                                    (0..healthy_runs).map(|r| (0.0, 0.0, r)).collect()
+                                } else {
+                                    sizes
+                                        .iter()
+                                        .flat_map(|&s| onsets.iter().map(move |&o| (s, o, 0)))
+                                        .collect()
+                                };
+                                for (size, onset, rep) in runs {
+                                    // Seeds depend on the case, not its position in the matrix.
+                                    let seed = 10_000 * rig
+                                        + 1_000 * (sup as u64 / 50)
+                                        + 100 * (tc as u64 / 5)
+                                        + (size * 1000.0) as u64
+                                        + onset as u64
+                                        + 37 * rep;
                                     cases.push(Case {
                                         rig,
                                         supply_bar: sup,
                                         temp_c: tc,
+                                        with_temp,
                                         kind,
                                         size_lpm: size,
                                         onset_s: onset,
@@ -293,11 +360,18 @@ fn run(cli: Cli) -> Result<ExitCode> {
                     }
                 }
             }
+            let cfg = EvalConfig {
+                params,
+                calibrate: !no_calibration,
+                nominal_rig,
+                cache,
+                threads,
+            };
             let start = std::time::Instant::now();
             let progress = |d: usize, n: usize| {
                 eprint!("\r{d}/{n} runs");
             };
-            let results = eval::run_all(&cases, &Nominal(params), nominal_rig, threads, &progress);
+            let results = eval::run_all(&cases, &cfg, &progress)?;
             eprintln!(" in {:.0} s", start.elapsed().as_secs_f64());
             if let Some(path) = out {
                 let mut f = std::io::BufWriter::new(std::fs::File::create(&path)?);
@@ -307,6 +381,8 @@ fn run(cli: Cli) -> Result<ExitCode> {
                 }
             }
             print!("{}", eval::table(&results));
+            println!();
+            print!("{}", eval::by_condition(&results));
             Ok(ExitCode::SUCCESS)
         }
         Command::Simulate {
@@ -324,6 +400,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
             rig_seed,
             rig,
             no_truth,
+            dump_rig,
         } => {
             let nominal = match &rig {
                 Some(p) => host_sim::load_params(p)?,
@@ -359,6 +436,18 @@ fn run(cli: Cli) -> Result<ExitCode> {
                 "--duration must be > 0"
             );
             anyhow::ensure!(internal >= 0.0 && external >= 0.0, "leak flows must be ≥ 0");
+            if let Some(path) = &dump_rig {
+                let mut truth = rig_hw.plant.clone();
+                truth.sensors.pressure_offsets_bar = scenario.sensors.pressure_offsets_bar;
+                truth.sensors.position_offset_m = scenario.sensors.position_offset_m;
+                let text = format!(
+                    "# True plant of the simulated rig (edge gains P→A, B→T, P→B, A→T: {:?})\n{}",
+                    rig_hw.edge_gain,
+                    toml::to_string(&truth)?
+                );
+                std::fs::write(path, text)
+                    .with_context(|| format!("{}: cannot write", path.display()))?;
+            }
             let meta = vec![
                 ("sample_rate_hz", format!("{}", scenario.sample_rate_hz)),
                 ("source", format!("host-sim {} simulate", env!("CARGO_PKG_VERSION"))),

@@ -192,3 +192,76 @@ fn simulate_writes_a_recording_replay_reads() {
     let out = host_sim(&["replay", p.to_str().unwrap(), "--json"]);
     assert!(out.status.success());
 }
+
+#[test]
+fn calibrate_writes_params_that_replay_accepts() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = dir.path().join("healthy.csv.gz");
+    let params = dir.path().join("site.toml");
+    let out = host_sim(&[
+        "simulate",
+        "-o",
+        rec.to_str().unwrap(),
+        "--duration",
+        "40",
+        "--rig-seed",
+        "5",
+        "--no-truth",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let out = host_sim(&[
+        "calibrate",
+        rec.to_str().unwrap(),
+        "-o",
+        params.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        report.contains("valve flow gain") && report.contains("NIS"),
+        "{report}"
+    );
+    let text = std::fs::read_to_string(&params).unwrap();
+    assert!(text.starts_with("# Installation parameters fitted by host-sim calibrate"));
+    let out = host_sim(&[
+        "replay",
+        rec.to_str().unwrap(),
+        "--params",
+        params.to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["verdict"], "healthy");
+}
+
+#[test]
+fn calibrate_refuses_a_recording_without_moves() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut body = String::from(HEADER);
+    for k in 0..30_000 {
+        body += &format!("{:.3},50.0,26.2,24.9,0.6,0.0400,0.0\n", k as f64 * 0.001);
+    }
+    let rec = write(dir.path(), "still.csv", &body);
+    let out = host_sim(&[
+        "calibrate",
+        rec.to_str().unwrap(),
+        "-o",
+        dir.path().join("p.toml").to_str().unwrap(),
+    ]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("still.csv") && err.contains("moves"), "{err}");
+}

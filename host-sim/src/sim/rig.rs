@@ -169,8 +169,16 @@ impl RigPhysics {
         let mut flows = [0.0; 4];
         for _ in 0..2 {
             let q_pa = kv_ext * self.edge_gain[0] * open_pos * orifice(p2 - s.p3);
-            let q_bt = kv_ext * self.edge_gain[1] * open_pos * orifice(s.p4 - p5);
-            let q_pb = kv_ret * self.edge_gain[2] * open_neg * orifice(p2 - s.p4);
+            let q_bt = kv_ext
+                * self.edge_gain[1]
+                * vlv.rod_edge_gain_extend
+                * open_pos
+                * orifice(s.p4 - p5);
+            let q_pb = kv_ret
+                * self.edge_gain[2]
+                * vlv.rod_edge_gain_retract
+                * open_neg
+                * orifice(p2 - s.p4);
             let q_at = kv_ret * self.edge_gain[3] * open_neg * orifice(s.p3 - p5);
             flows = [q_pa, q_bt, q_pb, q_at];
             let (a, b) = self.port_pressures(q_pa + q_pb, q_bt + q_at, t);
@@ -193,6 +201,7 @@ impl RigPhysics {
         } else {
             0.0
         };
+        let ext_base = p.leakage.external_lpm_per_bar * LPM / BAR * lam * (s.p4 - p5);
 
         let xc = s.x.clamp(0.0, c.stroke_m);
         let vol_a = c.dead_volume_piston_m3 + c.piston_area_m2 * xc;
@@ -203,7 +212,7 @@ impl RigPhysics {
         let beta4 = bulk_modulus_exact(&p.fluid, s.p4) * soft;
         let dp3 = beta3 / vol_a * (q_pa - q_at + leak_a - seal - q_int - c.piston_area_m2 * s.v);
         let dp4 = beta4 / vol_b
-            * (q_pb - q_bt + leak_b + seal + q_int - q_ext + c.rod_side_area_m2 * s.v);
+            * (q_pb - q_bt + leak_b + seal + q_int - q_ext - ext_base + c.rod_side_area_m2 * s.v);
 
         // Mechanics with Karnopp stick–slip friction and end stops.
         let load = load_terms_exact(&p.load, xc);
