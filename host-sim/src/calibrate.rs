@@ -598,7 +598,10 @@ impl Calibration {
         s
     }
 
-    /// The parameters as TOML, with the report as a comment header.
+    /// The installation's parameters as TOML, with the report as a comment
+    /// header. The `[filter]` section is left out on purpose: filter tuning
+    /// belongs to the monitor version, not to the installation, so a newer
+    /// monitor's defaults apply to an existing installation file.
     pub fn to_toml(&self, source: &str) -> Result<String, toml::ser::Error> {
         let mut out =
             format!("# Installation parameters fitted by host-sim calibrate from {source}\n");
@@ -606,7 +609,9 @@ impl Calibration {
             out += &format!("# {line}\n");
         }
         out += "\n";
-        out += &toml::to_string(&self.params)?;
+        let mut table = toml::Table::try_from(&self.params)?;
+        table.remove("filter");
+        out += &toml::to_string(&table)?;
         Ok(out)
     }
 }

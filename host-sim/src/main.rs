@@ -94,6 +94,9 @@ enum Command {
         /// Noise seed.
         #[arg(long, default_value_t = 1)]
         seed: u64,
+        /// Sample rate of the recording, Hz.
+        #[arg(long, default_value_t = 1000.0)]
+        rate: f64,
         /// Simulate a rig that differs from nominal (seeded variation of
         /// valve, friction, mass, air, dead volumes, sensor offsets).
         #[arg(long)]
@@ -397,6 +400,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
             onset,
             law,
             seed,
+            rate,
             rig_seed,
             rig,
             no_truth,
@@ -418,6 +422,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
                 external_law: law,
                 leak_onset_s: onset,
                 seed,
+                sample_rate_hz: rate,
                 ..Scenario::default()
             };
             let rig_hw = match rig_seed {
@@ -436,6 +441,10 @@ fn run(cli: Cli) -> Result<ExitCode> {
                 "--duration must be > 0"
             );
             anyhow::ensure!(internal >= 0.0 && external >= 0.0, "leak flows must be ≥ 0");
+            anyhow::ensure!(
+                (100.0..=20_000.0).contains(&rate),
+                "--rate must be within 100..20000 Hz"
+            );
             if let Some(path) = &dump_rig {
                 let mut truth = rig_hw.plant.clone();
                 truth.sensors.pressure_offsets_bar = scenario.sensors.pressure_offsets_bar;

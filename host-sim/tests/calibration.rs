@@ -47,9 +47,11 @@ fn recovers_valve_and_load_of_a_different_rig() {
     assert!((p.friction.viscous_ns_per_m / truth.friction.viscous_ns_per_m - 1.0).abs() < 0.1);
     assert!((p.load.gravity_scale / truth.load.gravity_scale - 1.0).abs() < 0.03);
     assert!(cal.warnings.is_empty(), "{:?}", cal.warnings);
-    // On its own healthy recording the calibrated monitor reads ~zero.
+    // On its own healthy recording the calibrated monitor's largest
+    // detection reading stays below half the alarm level.
+    let half = 0.5 * Params::nominal().alarm.alarm_lpm;
     assert!(
-        cal.leak_after_lpm[0] < 0.03 && cal.leak_after_lpm[1] < 0.03,
+        cal.leak_after_lpm[0] < half && cal.leak_after_lpm[1] < half,
         "{}",
         cal.report()
     );

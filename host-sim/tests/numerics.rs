@@ -140,3 +140,22 @@ mod common_psd {
         }
     }
 }
+
+#[test]
+fn a_failed_optional_temperature_sensor_is_reported_but_keeps_the_verdict() {
+    let mut s = samples(0.0, 0.0, 37);
+    for x in &mut s {
+        x.temp_oil_c = Some(30.0);
+    }
+    for x in &mut s[20_000..20_100] {
+        x.temp_oil_c = Some(500.0); // implausible
+    }
+    let st = replay::<f32>(&s);
+    assert!(st[20_000]
+        .events
+        .contains(&Event::SensorFault(monitor::Channel::TempOil)));
+    assert_ne!(st[20_000].faulted_channels, 0);
+    assert!(st[20_000..20_100]
+        .iter()
+        .all(|x| x.verdict == Verdict::Healthy));
+}

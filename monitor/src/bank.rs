@@ -1,13 +1,14 @@
 //! The bank: one EKF per leak hypothesis, stepped on every sample.
 //!
-//! Every filter carries the six plant states and two valve nuisance states
-//! (the flow-gain deviations of the two spool directions, random walks: the
+//! Every filter carries the six plant states and three nuisance states,
+//! random walks: the flow-gain deviations of the two spool directions (the
 //! valve's real coefficients are never known to better than a few percent,
-//! and that alone would masquerade as a leak). Each leak hypothesis adds its leak
+//! and that alone would masquerade as a leak) and the healthy laminar
+//! leakage's deviation (oil viscosity). Each leak hypothesis adds its leak
 //! coefficient(s) as slowly varying (random-walk) states, so a filter does
 //! not assume a leak size: it estimates it. The healthy filter has none.
 //!
-//! State layout: `[x_p, ẋ_p, x_v, ẋ_v, p3, p4, gain_ext, gain_ret, θ…]`.
+//! State layout: `[x_p, ẋ_p, x_v, ẋ_v, p3, p4, gain_ext, gain_ret, laminar, θ…]`.
 //! Per filter and step the bank reports innovations, the normalised
 //! innovation squared (NIS) and the Gaussian log-likelihood, from which
 //! the decision layer builds its evidence.
@@ -27,8 +28,10 @@ pub const NZ: usize = 3;
 pub const GAIN_EXT: usize = NX;
 /// Index of the retract-direction flow-gain nuisance state.
 pub const GAIN_RET: usize = NX + 1;
+/// Index of the laminar-leakage (viscosity) nuisance state.
+pub const LAMINAR: usize = NX + 2;
 /// States before the leak coefficients (plant + nuisance).
-pub const NB: usize = NX + 2;
+pub const NB: usize = NX + 3;
 const MEASURED: [usize; NZ] = [XP, P3, P4];
 
 /// One sample's measurements in scaled filter units (see `model`), with
@@ -89,15 +92,19 @@ pub struct StepContext<T> {
     pub spool_dt: SpoolStep<T>,
     /// Pressure-transmitter lag, s (inflates pressure noise by (τ·ṗ)²).
     pub pressure_lag_s: T,
-    /// Learning weight ∈ [0, 1] of the valve-nuisance and leak states this
-    /// sample (0 during transients).
+    /// Learning weight ∈ [0, 1] of the leak states this sample (0 during
+    /// transients and fast moves).
     pub learning: T,
+    /// Learning weight of the valve flow-gain states (0 at holds and during
+    /// transients).
+    pub gain_learning: T,
 }
 
 /// Process-noise intensities per scaled state, per second.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ProcessNoise<T> {
-    /// Position, velocity, spool, spool rate, p3, p4, gain_ext, gain_ret.
+    /// Position, velocity, spool, spool rate, p3, p4, gain_ext, gain_ret,
+    /// laminar.
     pub base: [T; NB],
     /// Leak coefficient random walk.
     pub leak: T,
@@ -142,6 +149,7 @@ impl<T: Real, const N: usize> HypothesisFilter<T, N> {
         Nuisance {
             gain_extend: self.ekf.x[GAIN_EXT],
             gain_retract: self.ekf.x[GAIN_RET],
+            laminar: self.ekf.x[LAMINAR],
         }
     }
 
@@ -187,6 +195,13 @@ impl<T: Real, const N: usize> HypothesisFilter<T, N> {
         }
         self.ekf.predict_covariance(&phi, &q)?;
 
+        let mut weights = SVector::<T, N>::repeat(T::ONE);
+        weights[GAIN_EXT] = ctx.gain_learning;
+        weights[GAIN_RET] = ctx.gain_learning;
+        weights[LAMINAR] = ctx.learning;
+        for i in NB..N {
+            weights[i] = ctx.learning;
+        }
         let mut out = FilterOutput::default();
         let mut log_det = T::ONE;
         for (k, &j) in MEASURED.iter().enumerate() {
@@ -198,7 +213,7 @@ impl<T: Real, const N: usize> HypothesisFilter<T, N> {
             let r = m.r[k] + lag * lag;
             let u = self
                 .ekf
-                .update_state_weighted(j, m.z[k], r, k as u8, NX, ctx.learning)?;
+                .update_state_weighted(j, m.z[k], r, k as u8, &weights)?;
             out.innovation[k] = u.innovation;
             out.nis += u.innovation * u.innovation / u.variance;
             log_det *= u.variance;
@@ -274,6 +289,8 @@ impl<T: Real, const N: usize> HypothesisFilter<T, N> {
         phi[(P4, GAIN_EXT)] = g4 * j.p4_ge;
         phi[(P3, GAIN_RET)] = g3 * j.p3_gr;
         phi[(P4, GAIN_RET)] = g4 * j.p4_gr;
+        phi[(P3, LAMINAR)] = g3 * j.p3_lam;
+        phi[(P4, LAMINAR)] = g4 * j.p4_lam;
         if let Some(i) = li {
             phi[(P3, i)] = g3 * j.p3_li;
             phi[(P4, i)] = g4 * j.p4_li;

@@ -79,11 +79,11 @@ impl<T: Real, const N: usize> Ekf<T, N> {
         r: T,
         index: u8,
     ) -> Result<ScalarUpdate<T>, EkfError> {
-        self.update_state_weighted(j, z, r, index, N, T::ONE)
+        self.update_state_weighted(j, z, r, index, &SVector::repeat(T::ONE))
     }
 
-    /// As [`Self::update_state`], with the gain of states `from..N` scaled
-    /// by `weight` ∈ [0, 1] (conditional adaptation: slowly varying
+    /// As [`Self::update_state`], with the gain of each state scaled by its
+    /// `weights` entry ∈ [0, 1] (conditional adaptation: slowly varying
     /// parameters do not learn from samples the model is known to describe
     /// poorly). The Joseph form gives the exact covariance of the estimator
     /// for any gain, so P stays consistent with what the filter does.
@@ -93,8 +93,7 @@ impl<T: Real, const N: usize> Ekf<T, N> {
         z: T,
         r: T,
         index: u8,
-        from: usize,
-        weight: T,
+        weights: &SVector<T, N>,
     ) -> Result<ScalarUpdate<T>, EkfError> {
         let s = self.p[(j, j)] + r;
         if !(s.is_finite() && s > T::ZERO) {
@@ -104,8 +103,8 @@ impl<T: Real, const N: usize> Ekf<T, N> {
         let inv_s = T::ONE / s;
         let pj: SVector<T, N> = self.p.column(j).into_owned();
         let mut k: SVector<T, N> = pj * inv_s;
-        for i in from..N {
-            k[i] *= weight;
+        for i in 0..N {
+            k[i] *= weights[i];
         }
         self.x += k * nu;
         // Joseph form with h = e_j, elementwise (valid for any gain k):
@@ -190,7 +189,8 @@ mod tests {
             x: Vector2::new(0.0, 0.0),
             p: p0,
         };
-        f.update_state_weighted(0, 1.0, 0.5, 0, 1, 0.0).unwrap();
+        f.update_state_weighted(0, 1.0, 0.5, 0, &Vector2::new(1.0, 0.0))
+            .unwrap();
         assert_eq!(f.x[1], 0.0);
         let k = Vector2::new(2.0 / 2.5, 0.0);
         let h = Vector2::new(1.0, 0.0);

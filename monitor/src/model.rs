@@ -92,10 +92,21 @@ pub struct Nuisance<T> {
     pub gain_extend: T,
     /// Flow gain deviation for negative spool travel (P→B, A→T).
     pub gain_retract: T,
+    /// Deviation of the healthy laminar leakage (valve edges, piston seal)
+    /// from its modelled value, in units of
+    /// [`LAMINAR_REF`]: oil viscosity halves from 25 °C to 40 °C and with
+    /// it the leakage doubles. With a `temp_oil` reading this corrects the
+    /// residual; without one it is the temperature compensation. Its
+    /// signature differs from a leak's: edge leakage pulls each chamber
+    /// towards half the supply pressure, so its effect changes sign with
+    /// the chamber pressure, a leak's does not.
+    pub laminar: T,
 }
 
 /// Unit of the scaled flow-gain deviations (10 %).
 pub const GAIN_REF: f64 = 0.1;
+/// Unit of the scaled laminar-leakage deviation (50 %).
+pub const LAMINAR_REF: f64 = 0.5;
 
 /// Leak coefficients, l/min per 10 bar.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -140,6 +151,10 @@ pub struct Jacobian<T> {
     pub p3_gr: T,
     /// ∂ṗ4/∂gain_retract (scaled).
     pub p4_gr: T,
+    /// ∂ṗ3/∂laminar (scaled).
+    pub p3_lam: T,
+    /// ∂ṗ4/∂laminar (scaled).
+    pub p4_lam: T,
 }
 
 /// The model evaluated at one state.
@@ -313,7 +328,10 @@ impl<T: Real> Plant<T> {
         } else {
             zero
         };
-        let k_edge = self.k_edge * u.laminar_factor;
+        // Healthy laminar leakage scales with the viscosity factor, from the
+        // temperature reading and the filter's own estimate.
+        let laminar = u.laminar_factor * (T::ONE + nuis.laminar * T::c(LAMINAR_REF));
+        let k_edge = self.k_edge * laminar;
         let gref = T::c(GAIN_REF);
         let kv_ext = self.kv_ext * (T::ONE + nuis.gain_extend * gref);
         let kv_ret = self.kv_ret * (T::ONE + nuis.gain_retract * gref);
@@ -332,9 +350,14 @@ impl<T: Real> Plant<T> {
         // --- Leaks: healthy seal leakage plus the hypothesised leaks.
         let leak_unit = T::c(LEAK_UNIT);
         let k_int_extra = leaks.internal * leak_unit;
-        let k_int = self.k_seal * u.laminar_factor + k_int_extra;
+        let k_seal = self.k_seal * laminar;
+        let k_int = k_seal + k_int_extra;
         let k_ext_extra = leaks.external * leak_unit;
-        let k_ext = self.k_ext_base * u.laminar_factor + k_ext_extra;
+        // The rod-side baseline is a calibration correction, not a viscous
+        // gap: it keeps the temperature factor but not the filter's
+        // laminar estimate (which would make that collinear with a leak).
+        let k_ext_base = self.k_ext_base * u.laminar_factor;
+        let k_ext = k_ext_base + k_ext_extra;
         let dp_int = p3 - p4;
         let dp_ext = p4 - p5;
         let q_i = k_int * dp_int;
@@ -362,6 +385,10 @@ impl<T: Real> Plant<T> {
         let dqb_dxv = -(kv_ret_b * da_neg * g_pb) - kv_ext_b * da_pos * g_bt;
         let dqa_dp3 = -(kv_ext * a_pos * dg_pa) - kv_ret * a_neg * dg_at - k_edge - k_edge;
         let dqb_dp4 = -(kv_ret_b * a_neg * dg_pb) - kv_ext_b * a_pos * dg_bt - k_edge - k_edge;
+        // Laminar factor: d(healthy leakage)/d(state).
+        let dlam = u.laminar_factor * T::c(LAMINAR_REF) / laminar;
+        let lam_a = k_edge * (p2 + p5 - p3 - p3) - k_seal * dp_int;
+        let lam_b = k_edge * (p2 + p5 - p4 - p4) + k_seal * dp_int;
         // Gains: each direction's metering flows scale with its gain.
         let dge = self.kv_ext * gref / kv_ext;
         let dgr = self.kv_ret * gref / kv_ret;
@@ -394,6 +421,8 @@ impl<T: Real> Plant<T> {
             p4_ge: cb * ext_b * dge * inv_p,
             p3_gr: ca * ret_a * dgr * inv_p,
             p4_gr: cb * ret_b * dgr * inv_p,
+            p3_lam: ca * lam_a * dlam * inv_p,
+            p4_lam: cb * lam_b * dlam * inv_p,
         };
         let omega = self.omega;
         let f = [
@@ -413,11 +442,11 @@ impl<T: Real> Plant<T> {
         }
     }
 
-    /// The full Jacobian ∂f/∂[s, gain_ext, gain_ret, θ_i, θ_e] as a dense 10×10
+    /// The full Jacobian ∂f/∂[s, gain_ext, gain_ret, laminar, θ_i, θ_e] as a dense 11×11
     /// array (tests, calibration; the filter uses the sparse form).
-    pub fn dense_jacobian(&self, e: &Eval<T>) -> [[T; NX + 4]; NX + 4] {
+    pub fn dense_jacobian(&self, e: &Eval<T>) -> [[T; NX + 5]; NX + 5] {
         let j = &e.jac;
-        let mut a = [[T::ZERO; NX + 4]; NX + 4];
+        let mut a = [[T::ZERO; NX + 5]; NX + 5];
         a[XP][VP] = T::c(V_REF / X_REF);
         a[VP][XP] = j.v_x;
         a[VP][VP] = j.v_v;
@@ -433,7 +462,8 @@ impl<T: Real> Plant<T> {
         a[P3][P4] = j.p3_p4;
         a[P3][NX] = j.p3_ge;
         a[P3][NX + 1] = j.p3_gr;
-        a[P3][NX + 2] = j.p3_li;
+        a[P3][NX + 2] = j.p3_lam;
+        a[P3][NX + 3] = j.p3_li;
         a[P4][XP] = j.p4_x;
         a[P4][VP] = j.p4_v;
         a[P4][XV] = j.p4_xv;
@@ -441,8 +471,9 @@ impl<T: Real> Plant<T> {
         a[P4][P4] = j.p4_p4;
         a[P4][NX] = j.p4_ge;
         a[P4][NX + 1] = j.p4_gr;
-        a[P4][NX + 2] = j.p4_li;
-        a[P4][NX + 3] = j.p4_le;
+        a[P4][NX + 2] = j.p4_lam;
+        a[P4][NX + 3] = j.p4_li;
+        a[P4][NX + 4] = j.p4_le;
         a
     }
 
@@ -557,9 +588,9 @@ mod tests {
         u: &Inputs<f64>,
         n: Nuisance<f64>,
         l: Leaks<f64>,
-    ) -> [[f64; NX + 4]; NX + 4] {
-        let mut a = [[0.0; NX + 4]; NX + 4];
-        for j in 0..NX + 4 {
+    ) -> [[f64; NX + 5]; NX + 5] {
+        let mut a = [[0.0; NX + 5]; NX + 5];
+        for j in 0..NX + 5 {
             let h = 1e-6;
             let (mut sp, mut sm) = (*s, *s);
             let (mut lp, mut lm) = (l, l);
@@ -574,10 +605,14 @@ mod tests {
                     nm.gain_retract -= h;
                 }
                 8 => {
+                    np.laminar += h;
+                    nm.laminar -= h;
+                }
+                9 => {
                     lp.internal += h;
                     lm.internal -= h;
                 }
-                9 => {
+                10 => {
                     lp.external += h;
                     lm.external -= h;
                 }
@@ -605,6 +640,7 @@ mod tests {
         let nuis = Nuisance {
             gain_extend: 0.3,
             gain_retract: -0.2,
+            laminar: 0.4,
         };
         let cases = [
             (state(0.05, 0.02, 0.2, 30.0, 12.0), inputs(0.2)),
@@ -619,7 +655,7 @@ mod tests {
             let a = p.dense_jacobian(&e);
             let fd = fd_jacobian(&p, s, u, nuis, leaks);
             for i in 0..NX {
-                for j in 0..NX + 4 {
+                for j in 0..NX + 5 {
                     let scale = fd[i].iter().map(|v| v.abs()).fold(1e-9, f64::max);
                     let err = (a[i][j] - fd[i][j]).abs();
                     assert!(

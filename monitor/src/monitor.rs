@@ -7,7 +7,7 @@ use crate::decision::Decision;
 use crate::ekf::EkfError;
 use crate::fluid::laminar_flow_factor;
 use crate::hypothesis::Hypothesis;
-use crate::model::{Inputs, Plant, Step, BAR, GAIN_REF, NX, P_REF, X_REF};
+use crate::model::{Inputs, Plant, Step, BAR, GAIN_REF, LAMINAR_REF, NX, P_REF, X_REF};
 use crate::params::{ParamError, Params};
 use crate::quiet::Quietness;
 use crate::real::Real;
@@ -75,6 +75,7 @@ impl<T: Real> Monitor<T> {
                     T::c(f.q_pressure),
                     T::c(f.q_gain / (GAIN_REF * GAIN_REF)),
                     T::c(f.q_gain / (GAIN_REF * GAIN_REF)),
+                    T::c(f.q_laminar / (LAMINAR_REF * LAMINAR_REF)),
                 ],
                 leak: T::c(f.q_leak),
             },
@@ -89,6 +90,7 @@ impl<T: Real> Monitor<T> {
                 T::c(4.0 * sp * sp),
                 T::c(sq(f.gain_prior / GAIN_REF)),
                 T::c(sq(f.gain_prior / GAIN_REF)),
+                T::c(sq(f.laminar_prior / LAMINAR_REF)),
             ],
             leak_prior_sd: T::c(f.leak_prior_lpm),
             substeps: f.substeps,
@@ -111,7 +113,12 @@ impl<T: Real> Monitor<T> {
             temp_c: None,
             laminar_factor: T::ONE,
             held: None,
-            quiet: Quietness::new(f.quiet_rate_bar_s, f.quiet_flow_lpm, f.learning_recovery_s),
+            quiet: Quietness::new(
+                f.quiet_rate_bar_s,
+                f.quiet_flow_lpm,
+                f.gain_learning_flow_lpm,
+                f.learning_recovery_s,
+            ),
             fluid_ref: params.fluid.clone(),
         })
     }
@@ -203,6 +210,7 @@ impl<T: Real> Monitor<T> {
             spool_dt: self.spool_dt,
             pressure_lag_s: self.cfg.pressure_lag_s,
             learning: self.quiet.weight(),
+            gain_learning: self.quiet.gain_weight(),
         };
         let outputs = bank.step(&self.plant, &ctx, &self.cfg.noise, &m);
         let mut ok: [Option<FilterOutput<T>>; 4] = [None; 4];
@@ -275,7 +283,11 @@ impl<T: Real> Monitor<T> {
         }
         let d = &self.decision;
         flags |= d.flags();
-        let verdict = if faulted != 0 {
+        // The oil temperature is optional (the filters estimate viscosity
+        // themselves): its fault is reported in flags and events but does
+        // not take the verdict away. A required channel's fault does.
+        let required_fault = faulted & !Channel::TempOil.bit() != 0;
+        let verdict = if required_fault {
             Verdict::SensorFault
         } else {
             d.verdict()

@@ -237,6 +237,12 @@ params_struct! {
         pub q_gain: f64 = 1.0e-7,
         /// Prior 1σ of each valve flow-gain deviation (relative).
         pub gain_prior: f64 = 0.08,
+        /// Random-walk intensity of the healthy laminar-leakage deviation
+        /// (relative)²/s: oil warms over minutes (≈ 2 %/√s).
+        pub q_laminar: f64 = 4.0e-4,
+        /// Prior 1σ of the laminar-leakage deviation (relative): 25 → 40 °C
+        /// without a temperature reading is +100 %.
+        pub laminar_prior: f64 = 0.5,
         /// Random-walk intensity of each leak coefficient, (l/min at 10 bar)²/s.
         pub q_leak: f64 = 5.0e-3,
         /// Prior 1σ of each leak coefficient, l/min at 10 bar.
@@ -245,7 +251,7 @@ params_struct! {
         /// size average, s.
         pub evidence_window_s: f64 = 4.0,
         /// Time constant of the leak-flow average used for detection, s.
-        pub detection_window_s: f64 = 0.5,
+        pub detection_window_s: f64 = 0.25,
         /// Residual correlation length, samples: log-likelihoods are divided
         /// by it (consecutive model residuals are not independent).
         pub residual_correlation_samples: f64 = 50.0,
@@ -259,8 +265,12 @@ params_struct! {
         /// evidence and the valve and leak parameters learn at half weight,
         /// bar/s (see `quiet.rs`; 0 disables the weighting).
         pub quiet_rate_bar_s: f64 = 10.0,
-        /// Valve metering flow at which they learn at half weight, l/min.
+        /// Valve metering flow at which a sample counts half as evidence and
+        /// the leak states learn at half weight, l/min.
         pub quiet_flow_lpm: f64 = 10.0,
+        /// Valve metering flow at which the valve flow-gain states learn at
+        /// half weight, l/min (they are not observable at holds).
+        pub gain_learning_flow_lpm: f64 = 2.0,
         /// Time constant with which learning resumes after a transient, s.
         pub learning_recovery_s: f64 = 0.3,
         /// Nominal sample period, s; gaps over 5 periods re-initialise.
@@ -271,12 +281,16 @@ params_struct! {
 params_struct! {
     /// When to warn and alarm.
     pub struct AlarmConfig {
-        /// Leak flow that raises a warning, l/min.
-        pub warning_lpm: f64 = 0.06,
-        /// Leak flow that raises the alarm, l/min.
-        pub alarm_lpm: f64 = 0.1,
-        /// The evidence must hold this long before an alarm is raised, s.
-        pub debounce_s: f64 = 1.0,
+        /// Leak flow that raises a warning, l/min (on the reported average).
+        pub warning_lpm: f64 = 0.05,
+        /// Leak flow that raises the alarm, l/min. The default sits below
+        /// 0.1 l/min so that leaks of 0.1 l/min are caught, and above the
+        /// largest healthy reading seen in evaluation (≈ 0.07 l/min).
+        pub alarm_lpm: f64 = 0.08,
+        /// CUSUM decision interval, s: an alarm is raised when the time
+        /// integral of the relative excess over the alarm level reaches it
+        /// (this long at twice the alarm level).
+        pub debounce_s: f64 = 0.5,
         /// Minimum posterior probability of the leak hypothesis.
         pub min_probability: f64 = 0.9,
     }
@@ -386,7 +400,7 @@ impl Params {
                 });
             }
         }
-        let non_negative: [(&'static str, f64); 16] = [
+        let non_negative: [(&'static str, f64); 18] = [
             ("valve.dead_zone", self.valve.dead_zone),
             (
                 "valve.edge_leak_lpm_per_bar",
@@ -409,6 +423,8 @@ impl Params {
             ("filter.q_spool_rate", self.filter.q_spool_rate),
             ("filter.q_pressure", self.filter.q_pressure),
             ("filter.q_leak", self.filter.q_leak),
+            ("filter.q_laminar", self.filter.q_laminar),
+            ("filter.laminar_prior", self.filter.laminar_prior),
         ];
         for (name, v) in non_negative {
             if !(v.is_finite() && v >= 0.0) {
@@ -467,9 +483,13 @@ impl Params {
                 problem: "must be 1..=16",
             });
         }
-        let pos: [(&'static str, f64); 8] = [
+        let pos: [(&'static str, f64); 9] = [
             ("filter.leak_prior_lpm", self.filter.leak_prior_lpm),
             ("filter.quiet_flow_lpm", self.filter.quiet_flow_lpm),
+            (
+                "filter.gain_learning_flow_lpm",
+                self.filter.gain_learning_flow_lpm,
+            ),
             ("filter.evidence_window_s", self.filter.evidence_window_s),
             ("filter.detection_window_s", self.filter.detection_window_s),
             (

@@ -16,14 +16,20 @@
 //! stiff chamber is already 15 bar/s of model rate, balanced every sample
 //! by the measurement update):
 //!
-//! w = 1 / (1 + (r/r₀)² + (c/c₀)² + (q/q₀)²),
+//! w = w_t / (1 + (q/q₀)²),  w_t = 1 / (1 + (r/r₀)² + (c/c₀)²),
 //!
 //! r = smoothed rate of the estimated chamber pressures (bar/s), c =
 //! smoothed rate of the valve command (1/s), q = valve metering flow
-//! (l/min). After a transient w drops at once and recovers with a time
-//! constant, so the tail of a transient does not count either. The valve
-//! and leak parameter states learn with gain × w, and the decision counts
-//! evidence time as dt × w.
+//! (l/min). After a transient w_t drops at once and recovers with a time
+//! constant, so the tail of a transient does not count either. The leak
+//! states learn with gain × w, and the decision counts evidence time as
+//! dt × w.
+//!
+//! The valve's flow-gain states are the opposite case: they are only
+//! observable while the valve passes flow (at a hold the valve merely
+//! feeds whatever leaks, and a gain error there is indistinguishable from
+//! an internal leak — but it is also harmless, a few percent of a fraction
+//! of a litre). They learn with w_t·q²/(q² + q_g²).
 
 use crate::real::Real;
 
@@ -37,37 +43,63 @@ const QUIET_COMMAND_RATE: f64 = 0.5;
 pub struct Quietness<T> {
     rate_ref_bar_s: T,
     flow_ref_lpm: T,
+    gain_flow_lpm: T,
     recovery_s: T,
     last: Option<[T; 3]>,
     rates: [T; 3],
-    weight: T,
+    transient: T,
+    flow_lpm: T,
 }
 
 impl<T: Real> Quietness<T> {
     /// A tracker: pressure rate `rate_ref_bar_s` (bar/s) and valve flow
-    /// `flow_ref_lpm` (l/min) halve the weight; it recovers with
-    /// `recovery_s`. A `rate_ref_bar_s` ≤ 0 disables the weighting.
-    pub fn new(rate_ref_bar_s: f64, flow_ref_lpm: f64, recovery_s: f64) -> Self {
+    /// `flow_ref_lpm` (l/min) halve the evidence weight; it recovers with
+    /// `recovery_s`; the valve gains learn at half weight at a flow of
+    /// `gain_flow_lpm`. A `rate_ref_bar_s` ≤ 0 disables the weighting.
+    pub fn new(
+        rate_ref_bar_s: f64,
+        flow_ref_lpm: f64,
+        gain_flow_lpm: f64,
+        recovery_s: f64,
+    ) -> Self {
         Self {
             rate_ref_bar_s: T::c(rate_ref_bar_s),
             flow_ref_lpm: T::c(flow_ref_lpm),
+            gain_flow_lpm: T::c(gain_flow_lpm),
             recovery_s: T::c(recovery_s.max(1e-6)),
             last: None,
             rates: [T::ZERO; 3],
-            weight: T::ZERO,
+            transient: T::ZERO,
+            flow_lpm: T::ZERO,
         }
     }
 
-    /// Forget everything (filters restarted): weight 0, rising.
+    /// Forget everything (filters restarted): weights 0, rising.
     pub fn restart(&mut self) {
         self.last = None;
         self.rates = [T::ZERO; 3];
-        self.weight = T::ZERO;
+        self.transient = T::ZERO;
     }
 
-    /// The current weight.
+    /// The evidence weight w: how much the current sample counts as leak
+    /// evidence, and the learning weight of the leak states.
     pub fn weight(&self) -> T {
-        self.weight
+        if !(self.rate_ref_bar_s > T::ZERO) {
+            return T::ONE;
+        }
+        let q = self.flow_lpm / self.flow_ref_lpm;
+        self.transient / (T::ONE + q * q)
+    }
+
+    /// The learning weight of the valve flow-gain states.
+    pub fn gain_weight(&self) -> T {
+        let q2 = self.flow_lpm * self.flow_lpm;
+        let transient = if self.rate_ref_bar_s > T::ZERO {
+            self.transient
+        } else {
+            T::ONE
+        };
+        transient * q2 / (q2 + self.gain_flow_lpm * self.gain_flow_lpm)
     }
 
     /// Update with the estimated chamber pressures (bar), the valve command
@@ -80,9 +112,9 @@ impl<T: Real> Quietness<T> {
         valve_flow_lpm: T,
         dt: T,
     ) -> T {
+        self.flow_lpm = valve_flow_lpm.abs();
         if !(self.rate_ref_bar_s > T::ZERO) {
-            self.weight = T::ONE;
-            return self.weight;
+            return T::ONE;
         }
         let now = [p_piston_bar, p_rod_bar, command];
         if let Some(last) = self.last {
@@ -95,11 +127,11 @@ impl<T: Real> Quietness<T> {
         self.last = Some(now);
         let r = self.rates[0].abs().max(self.rates[1].abs()) / self.rate_ref_bar_s;
         let c = self.rates[2].abs() / T::c(QUIET_COMMAND_RATE);
-        let q = valve_flow_lpm / self.flow_ref_lpm;
-        let instant = T::ONE / (T::ONE + r * r + c * c + q * q);
-        let recovered = self.weight + (T::ONE - self.weight) * (dt / self.recovery_s).min(T::ONE);
-        self.weight = instant.min(recovered);
-        self.weight
+        let instant = T::ONE / (T::ONE + r * r + c * c);
+        let recovered =
+            self.transient + (T::ONE - self.transient) * (dt / self.recovery_s).min(T::ONE);
+        self.transient = instant.min(recovered);
+        self.weight()
     }
 }
 
@@ -109,7 +141,7 @@ mod tests {
 
     #[test]
     fn steady_plant_weighs_one_transients_near_zero_then_recover() {
-        let mut q = Quietness::<f64>::new(10.0, 10.0, 0.3);
+        let mut q = Quietness::<f64>::new(10.0, 10.0, 2.0, 0.3);
         let dt = 0.001;
         let mut w = 0.0;
         for _ in 0..3000 {
@@ -136,11 +168,23 @@ mod tests {
 
     #[test]
     fn fast_moves_weigh_little() {
-        let mut q = Quietness::<f32>::new(10.0, 10.0, 0.3);
+        let mut q = Quietness::<f32>::new(10.0, 10.0, 2.0, 0.3);
         let mut w = 0.0;
         for _ in 0..2000 {
             w = q.update(25.0, 5.0, 0.6, 35.0, 0.001);
         }
         assert!(w < 0.1, "{w}");
+        // …but that is when the valve gains learn.
+        assert!(q.gain_weight() > 0.99);
+    }
+
+    #[test]
+    fn valve_gains_do_not_learn_at_holds() {
+        let mut q = Quietness::<f32>::new(10.0, 10.0, 2.0, 0.3);
+        for _ in 0..3000 {
+            q.update(26.0, 24.0, 0.02, 0.3, 0.001);
+        }
+        assert!(q.weight() > 0.99);
+        assert!(q.gain_weight() < 0.03, "{}", q.gain_weight());
     }
 }

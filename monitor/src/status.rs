@@ -109,8 +109,10 @@ pub type Events = heapless::Vec<Event, 8>;
 pub struct Status {
     /// Sample time, s.
     pub t_s: f64,
-    /// Verdict: the latched alarm, a sensor fault (which takes precedence),
-    /// or healthy.
+    /// Verdict: the latched alarm, a sensor fault of a required channel
+    /// (which takes precedence), or healthy. A fault of the optional oil
+    /// temperature sensor is reported in `faulted_channels`, `health` and
+    /// the events, but leaves the verdict to the estimation.
     pub verdict: Verdict,
     /// The best-supported hypothesis right now, before debounce and latching.
     pub leading: Hypothesis,
