@@ -3,6 +3,7 @@
 //! anything lives in the `monitor` crate; this crate moves data in and out.
 #![allow(clippy::needless_range_loop)]
 
+pub mod decode;
 pub mod eval;
 pub mod recording;
 pub mod replay;

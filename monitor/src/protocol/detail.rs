@@ -95,25 +95,25 @@ impl DetailFrame {
         s.quantity(
             "LeakInternalSd",
             self.leak_internal_sd_ml_min.map(i32::from),
-            1e-3,
+            3,
             "l/min",
         );
         s.quantity(
             "LeakExternalSd",
             self.leak_external_sd_ml_min.map(i32::from),
-            1e-3,
+            3,
             "l/min",
         );
         s.quantity(
             "ValveGainDevExtend",
             self.valve_gain_extend_permille.map(i32::from),
-            0.1,
+            1,
             "%",
         );
         s.quantity(
             "ValveGainDevRetract",
             self.valve_gain_retract_permille.map(i32::from),
-            0.1,
+            1,
             "%",
         );
         s.done()

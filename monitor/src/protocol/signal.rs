@@ -20,10 +20,12 @@ pub struct Signal {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum SignalValue {
     /// A physical quantity: `value` in `unit` (the DBC unit), a multiple
-    /// of the DBC factor.
+    /// of the DBC factor 10^-`decimals`.
     Quantity {
         /// Physical value.
         value: f64,
+        /// Decimal places of the DBC factor.
+        decimals: u8,
         /// Unit.
         unit: &'static str,
     },
@@ -65,8 +67,12 @@ impl fmt::Display for Signal {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(f, "{}=", self.name)?;
         let unit = match self.value {
-            SignalValue::Quantity { value, unit } => {
-                write!(f, "{value}")?;
+            SignalValue::Quantity {
+                value,
+                decimals,
+                unit,
+            } => {
+                write!(f, "{value:.*}", decimals as usize)?;
                 unit
             }
             SignalValue::Integer { value, unit } => {
@@ -100,19 +106,22 @@ impl SignalList {
         let _ = self.0.push(Signal { name, value });
     }
 
-    /// A quantity `raw × factor` in `unit`, or not available.
+    /// A quantity `raw × 10^-decimals` in `unit`, or not available.
     pub fn quantity(
         &mut self,
         name: &'static str,
         raw: Option<i32>,
-        factor: f64,
+        decimals: u8,
         unit: &'static str,
     ) {
         match raw {
             Some(r) => self.push(
                 name,
                 SignalValue::Quantity {
-                    value: r as f64 * factor,
+                    // Division by the power of ten gives the double
+                    // nearest to the decimal value.
+                    value: r as f64 / libm::pow(10.0, decimals as f64),
+                    decimals,
                     unit,
                 },
             ),

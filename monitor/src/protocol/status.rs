@@ -103,13 +103,13 @@ impl StatusFrame {
         s.quantity(
             "LeakInternal",
             self.leak_internal_ml_min.map(i32::from),
-            1e-3,
+            3,
             "l/min",
         );
         s.quantity(
             "LeakExternal",
             self.leak_external_ml_min.map(i32::from),
-            1e-3,
+            3,
             "l/min",
         );
         s.integer("Health", self.health as u32, "");
