@@ -48,9 +48,9 @@ impl SampleClock {
         index as f64 * self.period_us as f64 * 1e-6
     }
 
-    /// Time of sample `index`, ms (wrapping after 49.7 days).
-    pub fn t_ms(&self, index: u64) -> u32 {
-        (index * self.period_us as u64 / 1000) as u32
+    /// Time of sample `index`, ms.
+    pub fn t_ms(&self, index: u64) -> u64 {
+        index * self.period_us as u64 / 1000
     }
 }
 
@@ -186,7 +186,7 @@ mod tests {
         assert_eq!(c.resync(5_020), 3);
         assert_eq!(c.next_index(), 5);
         assert_eq!(c.t_s(5), 0.005);
-        assert_eq!(c.t_ms(1_234), 1_234);
+        assert_eq!(c.t_ms(1_234), 1_234u64);
         // A resync that finds nothing lost never goes back in time.
         assert_eq!(c.resync(1_000), 0);
         assert_eq!(c.next_index(), 6);
