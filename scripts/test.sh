@@ -73,7 +73,9 @@ print(flash, ram)
 PY
 )
 read -r flash ram <<<"$text"
-stack=$(python3 scripts/stack_estimate.py "$elf" | tee /dev/stderr | sed -n 's/^STACK_ESTIMATE=//p')
+stack_report=$(python3 scripts/stack_estimate.py "$elf")
+echo "$stack_report"
+stack=$(sed -n 's/^STACK_ESTIMATE=//p' <<<"$stack_report")
 echo "firmware: flash ${flash} B, static RAM ${ram} B, stack estimate ${stack} B"
 [ "$flash" -gt 16384 ] || { echo "firmware image suspiciously small"; exit 1; }
 # Budget (README): flash <= 128 KiB, RAM incl. stacks <= 48 KiB.
