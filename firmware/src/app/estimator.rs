@@ -8,7 +8,6 @@ use core::sync::atomic::Ordering;
 use embassy_time::Instant;
 use monitor::alarm::AlarmLogic;
 use monitor::deadline::{DeadlineMonitor, SampleClock};
-use monitor::protocol::heartbeat::NIBBLE_MAX;
 use monitor::protocol::schedule::FrameScheduler;
 use monitor::protocol::{AlarmFrame, Command, DetailFrame, HeartbeatFrame, Message, StatusFrame};
 use monitor::signal::frontend::{average_scans, Frontend, FrontendConfig};
@@ -17,10 +16,6 @@ use monitor::Monitor;
 use super::shared::{LogEvent, Shared};
 use super::SAMPLE_PERIOD_US;
 use crate::board::{BootInfo, CycleCounter, Overrun, RelayOutput, SampleSource};
-
-fn saturate_u8(v: u32) -> u8 {
-    v.min(u8::MAX as u32) as u8
-}
 
 /// Run the estimator for ever. The relay starts de-energised. The monitor
 /// is borrowed (it lives in a static): a 3.6 KiB value moved into the
@@ -105,15 +100,12 @@ pub async fn run<S: SampleSource, R: RelayOutput, C: CycleCounter>(
         if due.heartbeat {
             let report = deadline.take_report();
             let dropped = shared.can.dropped.load(Ordering::Relaxed);
-            shared.post(Message::Heartbeat(HeartbeatFrame {
-                reset_cause: boot.reset_cause,
-                uptime_s: Instant::now().as_secs() as u16,
-                estimator_load_pct: report.load_pct,
-                peak_load_pct: report.peak_pct,
-                missed_samples: saturate_u8(report.missed),
-                adc_overruns: report.overruns.min(NIBBLE_MAX as u32) as u8,
-                can_tx_dropped: dropped.wrapping_sub(dropped_before).min(NIBBLE_MAX as u32) as u8,
-            }));
+            shared.post(Message::Heartbeat(HeartbeatFrame::new(
+                boot.reset_cause,
+                Instant::now().as_secs(),
+                &report,
+                dropped.wrapping_sub(dropped_before),
+            )));
             dropped_before = dropped;
             shared.set_load(report);
         }

@@ -16,6 +16,7 @@
 use super::bytes::{get_u16, put_u16};
 use super::signal::SignalList;
 use super::{FieldError, Signals};
+use crate::deadline::LoadReport;
 
 /// Why the board last reset (from the reset flags at boot).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -93,6 +94,27 @@ pub struct HeartbeatFrame {
 }
 
 impl HeartbeatFrame {
+    /// The heartbeat for one report period: `load` from the deadline
+    /// monitor, `can_dropped` frames dropped in the period, `uptime_s`
+    /// since boot (wrapping). Counts saturate as the wire requires.
+    pub fn new(
+        reset_cause: ResetCause,
+        uptime_s: u64,
+        load: &LoadReport,
+        can_dropped: u32,
+    ) -> Self {
+        let nibble = |v: u32| v.min(NIBBLE_MAX as u32) as u8;
+        Self {
+            reset_cause,
+            uptime_s: uptime_s as u16,
+            estimator_load_pct: load.load_pct,
+            peak_load_pct: load.peak_pct,
+            missed_samples: load.missed.min(u8::MAX as u32) as u8,
+            adc_overruns: nibble(load.overruns),
+            can_tx_dropped: nibble(can_dropped),
+        }
+    }
+
     pub(crate) fn write(&self, d: &mut [u8; 8]) {
         d[1] = (self.reset_cause as u8) << 4;
         put_u16(d, 2, self.uptime_s);
@@ -141,5 +163,27 @@ impl HeartbeatFrame {
             "",
         );
         s.done()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn built_from_a_load_report_with_saturation() {
+        let load = LoadReport {
+            processed: 990,
+            missed: 300,
+            overruns: 2,
+            load_pct: 37,
+            peak_pct: 142,
+        };
+        let h = HeartbeatFrame::new(ResetCause::Watchdog, 65_536 + 7, &load, 40);
+        assert_eq!(h.uptime_s, 7, "wraps");
+        assert_eq!((h.estimator_load_pct, h.peak_load_pct), (37, 142));
+        assert_eq!(h.missed_samples, 255);
+        assert_eq!((h.adc_overruns, h.can_tx_dropped), (2, 15));
+        assert_eq!(h.reset_cause, ResetCause::Watchdog);
     }
 }

@@ -30,7 +30,7 @@ pub mod signal;
 pub mod status;
 
 pub use alarm::AlarmFrame;
-pub use command::{Command, CommandFrame};
+pub use command::{Command, CommandFrame, CommandReceiver, CommandRejected};
 pub use detail::DetailFrame;
 pub use e2e::{E2eError, Sequence};
 pub use heartbeat::{HeartbeatFrame, ResetCause};

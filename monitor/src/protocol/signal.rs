@@ -9,6 +9,7 @@ pub type Signals = heapless::Vec<Signal, 12>;
 
 /// One signal.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Signal {
     /// Name as in the DBC file.
     pub name: &'static str,
@@ -18,6 +19,7 @@ pub struct Signal {
 
 /// A signal's value.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum SignalValue {
     /// A physical quantity: `value` in `unit` (the DBC unit), a multiple
     /// of the DBC factor 10^-`decimals`.
