@@ -67,8 +67,10 @@ impl CycleCounter for Dwt {
 pub struct Iwdg(IndependentWatchdog<'static, IWDG>);
 
 impl Iwdg {
-    /// Start the watchdog (it cannot be stopped again).
+    /// Start the watchdog (it cannot be stopped again). It pauses while
+    /// a debugger halts the core, so a breakpoint does not reset the board.
     pub fn start(iwdg: Peri<'static, IWDG>) -> Self {
+        pac::DBGMCU.apb1fzr().modify(|w| w.set_iwdg(true));
         let mut w = IndependentWatchdog::new(iwdg, WATCHDOG_TIMEOUT_US);
         w.unleash();
         Self(w)
