@@ -17,3 +17,4 @@
 
 pub mod app;
 pub mod board;
+pub mod board_map;

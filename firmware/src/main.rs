@@ -4,7 +4,7 @@
 //! priority than everything else the application does, so CAN, logging
 //! and the supervisor can never delay it; CAN, the supervisor and the log
 //! run in the thread-mode executor. See `firmware/src/lib.rs` for the
-//! tasks and `src/stm32/board_map.rs` for the wiring.
+//! tasks and `src/board_map.rs` for the wiring.
 #![no_std]
 #![no_main]
 
@@ -19,10 +19,10 @@ use embassy_stm32::Peri;
 use firmware::app;
 use firmware::app::shared::Shared;
 use firmware::board::BootInfo;
+use firmware::board_map::{self, Board, FRONTEND};
 use monitor::{Monitor, Params};
 use static_cell::StaticCell;
 use stm32::adc::AdcSampler;
-use stm32::board_map::{self, Board, FRONTEND};
 use stm32::can::{Receiver, Transmitter};
 use stm32::relay::Relay;
 use stm32::system::{Dwt, Iwdg, Led};

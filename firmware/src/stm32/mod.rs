@@ -1,7 +1,6 @@
 //! The STM32F405 board: the board trait implemented on embassy-stm32.
 
 pub mod adc;
-pub mod board_map;
 pub mod can;
 pub mod clocks;
 pub mod relay;

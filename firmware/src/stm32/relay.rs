@@ -8,8 +8,8 @@ use embassy_stm32::pac;
 use embassy_stm32::peripherals::PB12;
 use embassy_stm32::Peri;
 
-use super::board_map::{RELAY_PIN, RELAY_PORT};
 use firmware::board::RelayOutput;
+use firmware::board_map::{RELAY_PIN, RELAY_PORT};
 
 /// GPIO ports A..I of the STM32F405.
 const PORTS: [pac::gpio::Gpio; 9] = [

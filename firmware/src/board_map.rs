@@ -22,9 +22,16 @@
 //! 3.3 V rail. A 120 Ω shunt turns 4–20 mA into 0.48–2.4 V; the NE43
 //! fault limits 3.6 / 21 mA are 0.43 / 2.52 V, inside the ADC range, so a
 //! broken or shorted loop is seen as such.
+//!
+//! The analogue part (ranges, shunts, divider, sampling rate) builds
+//! without the HAL, so an emulated board can feed the same front end; the
+//! pin assignment needs the `stm32` feature.
 
+#[cfg(feature = "stm32")]
 use embassy_stm32::adc::{AdcChannel, AnyAdcChannel, SampleTime};
+#[cfg(feature = "stm32")]
 use embassy_stm32::peripherals::{ADC1, CAN1, DMA2_CH0, IWDG, PB12, PB8, PB9, PC12, TIM3};
+#[cfg(feature = "stm32")]
 use embassy_stm32::{Peri, Peripherals};
 use monitor::signal::current_loop::{AdcSpec, CurrentLoop, OffsetDivider};
 use monitor::signal::frontend::{FrontendConfig, Input, CHANNELS};
@@ -38,6 +45,7 @@ pub const SCAN_RATE_HZ: u32 = 1000 * SCANS_PER_SAMPLE as u32;
 pub const BLOCK_LEN: usize = SCANS_PER_SAMPLE * CHANNELS;
 /// ADC sample time per channel: 144 ADC clocks at 21 MHz (6.9 µs; a scan
 /// of 7 channels takes 52 µs of the 250 µs between triggers).
+#[cfg(feature = "stm32")]
 pub const ADC_SAMPLE_TIME: SampleTime = SampleTime::CYCLES144;
 
 /// Is the optional oil-temperature transmitter fitted? If not, PC2 is
@@ -95,6 +103,7 @@ pub const FRONTEND: FrontendConfig = FrontendConfig {
 };
 
 /// The board's peripherals, taken out of embassy's `Peripherals`.
+#[cfg(feature = "stm32")]
 pub struct Board {
     /// ADC1, scanning the inputs.
     pub adc: Peri<'static, ADC1>,
@@ -119,6 +128,7 @@ pub struct Board {
 }
 
 /// Assign the pins.
+#[cfg(feature = "stm32")]
 pub fn split(p: Peripherals) -> Board {
     Board {
         adc: p.ADC1,
