@@ -12,6 +12,12 @@
 //! - [`app::supervisor`] (low priority): watchdog fed only while the
 //!   estimator keeps its deadline; relay off if it stalls; status LED;
 //!   periodic log.
+//!
+//! Another board (e.g. an emulated one) depends on this crate with
+//! `default-features = false`, implements the traits of [`board`],
+//! provides an embassy-time driver, a `critical-section` implementation
+//! and a defmt logger, defines a `static` [`app::shared::Shared`], and
+//! wraps the `run` functions in its own tasks (`src/main.rs` shows how).
 #![no_std]
 #![deny(missing_docs)]
 
