@@ -7,9 +7,18 @@ cd "$(dirname "$0")/.."
 
 step() { printf '\n==> %s\n' "$*"; }
 
-step "toolchain: thumbv7em-none-eabihf, rustfmt, clippy"
+step "toolchain: thumbv7em-none-eabihf, rustfmt, clippy, llvm-tools, flip-link"
 rustup target add thumbv7em-none-eabihf
-rustup component add rustfmt clippy
+rustup component add rustfmt clippy llvm-tools
+# The firmware links through flip-link (.cargo/config.toml).
+command -v flip-link >/dev/null || cargo install flip-link --locked
+
+step "Python tools for the DBC check: cantools, autosar-e2e"
+pip_install() {
+  PIP_DISABLE_PIP_VERSION_CHECK=1 PIP_ROOT_USER_ACTION=ignore python3 -m pip install --quiet "$@" ||
+    PIP_DISABLE_PIP_VERSION_CHECK=1 PIP_ROOT_USER_ACTION=ignore python3 -m pip install --quiet --user --break-system-packages "$@"
+}
+python3 -c 'import cantools, e2e' 2>/dev/null || pip_install 'cantools==45.1.0' 'autosar-e2e==1.0.0'
 
 step "format"
 cargo fmt --all --check
@@ -22,6 +31,11 @@ cargo clippy -p monitor -p firmware --target thumbv7em-none-eabihf -- -D warning
 
 step "host tests (monitor, host-sim)"
 cargo test --workspace
+
+step "the DBC and the code agree (cantools decodes the Rust encoder's frames; host-sim decodes cantools')"
+cargo build --quiet -p host-sim
+cargo run --quiet -p host-sim --example can_vectors > target/can-vectors.jsonl
+python3 scripts/check_dbc.py can/leak-monitor.dbc target/can-vectors.jsonl target/debug/host-sim
 
 if [ "${LONG:-0}" = 1 ]; then
   step "one simulated hour in f32"
@@ -59,7 +73,15 @@ print(flash, ram)
 PY
 )
 read -r flash ram <<<"$text"
-echo "firmware: flash ${flash} B, static RAM ${ram} B"
+stack_report=$(python3 scripts/stack_estimate.py "$elf")
+echo "$stack_report"
+stack=$(sed -n 's/^STACK_ESTIMATE=//p' <<<"$stack_report")
+echo "firmware: flash ${flash} B, static RAM ${ram} B, stack estimate ${stack} B"
 [ "$flash" -gt 16384 ] || { echo "firmware image suspiciously small"; exit 1; }
+# Budget (README): flash <= 128 KiB, RAM incl. stacks <= 48 KiB.
+[ "$flash" -le $((128 * 1024)) ] || { echo "flash ${flash} B over the 128 KiB budget"; exit 1; }
+[ $((ram + stack)) -le $((48 * 1024)) ] || { echo "RAM $((ram + stack)) B over the 48 KiB budget"; exit 1; }
+# The application tasks build without the STM32 board (for other boards).
+cargo build -p firmware --lib --no-default-features --release --target thumbv7em-none-eabihf
 
 step "all checks passed"

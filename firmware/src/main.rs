@@ -1,46 +1,139 @@
-//! Leak monitor firmware (minimal bring-up): runs the monitor on the
-//! STM32F405 at 1 kHz. The real sampling, relay, CAN and watchdog tasks
-//! replace the synthetic sample source in the firmware issue.
+//! Leak monitor firmware for the STM32F405RG (168 MHz Cortex-M4F).
+//!
+//! Two executors: the estimator runs in an interrupt executor at a higher
+//! priority than everything else the application does, so CAN, logging
+//! and the supervisor can never delay it; CAN, the supervisor and the log
+//! run in the thread-mode executor. See `firmware/src/lib.rs` for the
+//! tasks and `src/board_map.rs` for the wiring.
 #![no_std]
 #![no_main]
 
-use defmt::info;
-use embassy_executor::Spawner;
-use embassy_time::{Duration, Ticker};
-use monitor::{Monitor, Params, Sample};
+mod stm32;
+
+use defmt::unwrap;
+use embassy_executor::{Executor, InterruptExecutor, Spawner};
+use embassy_stm32::interrupt;
+use embassy_stm32::interrupt::{InterruptExt, Priority};
+use embassy_stm32::peripherals::{CAN1, PB8, PB9};
+use embassy_stm32::Peri;
+use firmware::app;
+use firmware::app::shared::Shared;
+use firmware::board::BootInfo;
+use firmware::board_map::{self, Board, FRONTEND};
+use monitor::{Monitor, Params};
+use static_cell::StaticCell;
+use stm32::adc::AdcSampler;
+use stm32::can::{Receiver, Transmitter};
+use stm32::relay::Relay;
+use stm32::system::{Dwt, Iwdg, Led};
 use {defmt_rtt as _, panic_probe as _};
 
-#[embassy_executor::task]
-async fn estimator(mut monitor: Monitor<f32>) {
-    let mut ticker = Ticker::every(Duration::from_millis(1));
-    let mut k: u32 = 0;
-    loop {
-        ticker.next().await;
-        // Placeholder input: a cylinder at rest (no ADC yet).
-        let sample = Sample {
-            t_s: k as f64 * 1e-3,
-            p_supply_bar: Some(50.0),
-            p_piston_bar: Some(26.0),
-            p_rod_bar: Some(24.5),
-            p_tank_bar: Some(0.6),
-            x_piston_m: Some(0.04),
-            u_valve: Some(0.0),
-            temp_oil_c: None,
-        };
-        let status = monitor.step(&sample);
-        if k % 1000 == 0 {
-            info!("t={}s verdict={}", k / 1000, status.verdict);
-        }
-        k = k.wrapping_add(1);
-    }
+static SHARED: Shared = Shared::new();
+static RELAY: StaticCell<Relay> = StaticCell::new();
+static MONITOR: StaticCell<Monitor<f32>> = StaticCell::new();
+static EXECUTOR_HIGH: InterruptExecutor = InterruptExecutor::new();
+static EXECUTOR_LOW: StaticCell<Executor> = StaticCell::new();
+
+/// Priority of the estimator's executor: above the thread-mode tasks,
+/// below the DMA and CAN interrupt handlers (priority 0), which are short.
+const ESTIMATOR_PRIORITY: Priority = Priority::P6;
+
+/// A spare interrupt vector that runs the estimator's executor.
+#[interrupt]
+unsafe fn UART4() {
+    unsafe { EXECUTOR_HIGH.on_interrupt() }
 }
 
-#[embassy_executor::main]
-async fn main(spawner: Spawner) {
-    let _p = embassy_stm32::init(Default::default());
+#[embassy_executor::task]
+async fn estimator(
+    source: AdcSampler,
+    relay: &'static Relay,
+    cycles: Dwt,
+    monitor: &'static mut Monitor<f32>,
+    boot: BootInfo,
+) {
+    app::estimator::run(source, relay, cycles, monitor, FRONTEND, boot, &SHARED).await
+}
+
+#[embassy_executor::task]
+async fn supervisor(watchdog: Iwdg, relay: &'static Relay, led: Led) {
+    app::supervisor::run(watchdog, relay, led, &SHARED).await
+}
+
+#[embassy_executor::task]
+async fn can_tx(tx: Transmitter) {
+    app::can_tx::run(tx, &SHARED).await
+}
+
+#[embassy_executor::task]
+async fn can_rx(rx: Receiver) {
+    app::can_rx::run(rx, &SHARED).await
+}
+
+/// Bring CAN up (waits for an idle bus) without holding anything else up.
+#[embassy_executor::task]
+async fn can_start(
+    spawner: Spawner,
+    can: Peri<'static, CAN1>,
+    rx: Peri<'static, PB8>,
+    tx: Peri<'static, PB9>,
+) {
+    let (tx, rx) = stm32::can::start(can, rx, tx).await;
+    defmt::info!(
+        "CAN: on the bus at {} bit/s",
+        monitor::protocol::BITRATE_BPS
+    );
+    spawner.spawn(unwrap!(can_tx(tx)));
+    spawner.spawn(unwrap!(can_rx(rx)));
+}
+
+#[cortex_m_rt::entry]
+fn main() -> ! {
+    let low = EXECUTOR_LOW.init(Executor::new());
+    // `start` runs once, inside `run`, and returns: its stack frame (the
+    // set-up) is gone before the tasks run.
+    low.run(start)
+}
+
+/// Bring the board up and spawn the tasks.
+#[inline(never)]
+fn start(spawner: Spawner) {
+    let boot = BootInfo {
+        reset_cause: stm32::system::take_reset_cause(),
+    };
+    let p = embassy_stm32::init(stm32::clocks::config());
+    let Board {
+        adc,
+        adc_dma,
+        adc_trigger,
+        inputs,
+        relay,
+        led,
+        can,
+        can_rx,
+        can_tx,
+        iwdg,
+    } = board_map::split(p);
+    // First of all: the relay output, de-energised.
+    let relay: &'static Relay = RELAY.init(Relay::new(relay));
+    defmt::info!(
+        "leak monitor {} on STM32F405, last reset: {}",
+        env!("CARGO_PKG_VERSION"),
+        boot.reset_cause
+    );
     let monitor = match Monitor::new(&Params::nominal()) {
-        Ok(m) => m,
+        Ok(m) => MONITOR.init(m),
         Err(e) => defmt::panic!("invalid built-in parameters: {}", e.field),
     };
-    spawner.spawn(defmt::unwrap!(estimator(monitor)));
+    let core = unwrap!(cortex_m::Peripherals::take());
+    let cycles = Dwt::new(core.DCB, core.DWT);
+    let source = AdcSampler::new(adc, adc_dma, adc_trigger, inputs);
+    let watchdog = Iwdg::start(iwdg);
+
+    interrupt::UART4.set_priority(ESTIMATOR_PRIORITY);
+    let high = EXECUTOR_HIGH.start(interrupt::UART4);
+    high.spawn(unwrap!(estimator(source, relay, cycles, monitor, boot)));
+
+    spawner.spawn(unwrap!(supervisor(watchdog, relay, Led::new(led))));
+    spawner.spawn(unwrap!(can_start(spawner, can, can_rx, can_tx)));
 }

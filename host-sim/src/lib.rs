@@ -6,6 +6,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod calibrate;
+pub mod decode;
 pub mod eval;
 pub mod recording;
 pub mod replay;

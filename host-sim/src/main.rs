@@ -1,5 +1,6 @@
 //! `host-sim`: replay recordings through the leak monitor, simulate a rig,
-//! calibrate an installation, evaluate, plot.
+//! calibrate an installation, evaluate, plot, decode the monitor's CAN
+//! frames.
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
@@ -171,6 +172,20 @@ enum Command {
         #[arg(long)]
         out: Option<PathBuf>,
     },
+    /// Decode the leak monitor's CAN frames in a candump log
+    /// (`candump -l`: `(sec.usec) iface id#hex`), checking every frame's
+    /// CRC and counter.
+    Decode {
+        /// The log (`-` reads standard input).
+        log: PathBuf,
+        /// One JSON object per frame instead of text.
+        #[arg(long)]
+        json: bool,
+        /// Exit with status 1 if any frame has a bad CRC, a malformed
+        /// field, a counter jump or a repeated counter.
+        #[arg(long)]
+        strict: bool,
+    },
 }
 
 fn main() -> ExitCode {
@@ -225,8 +240,28 @@ fn replay_one(
     Ok(())
 }
 
+/// Decode a candump log; the summary goes to stderr.
+fn decode(log: &std::path::Path, json: bool, strict: bool) -> Result<ExitCode> {
+    let name = log.display().to_string();
+    let mut out = std::io::BufWriter::new(std::io::stdout().lock());
+    let summary = if log.as_os_str() == "-" {
+        host_sim::decode::decode_log(std::io::stdin().lock(), "<stdin>", json, &mut out)?
+    } else {
+        let f = std::fs::File::open(log).with_context(|| format!("{name}: cannot open"))?;
+        host_sim::decode::decode_log(std::io::BufReader::new(f), &name, json, &mut out)?
+    };
+    out.flush()?;
+    eprintln!("{summary}");
+    Ok(if strict && summary.has_errors() {
+        ExitCode::FAILURE
+    } else {
+        ExitCode::SUCCESS
+    })
+}
+
 fn run(cli: Cli) -> Result<ExitCode> {
     match cli.command {
+        Command::Decode { log, json, strict } => decode(&log, json, strict),
         Command::Replay {
             recordings,
             params,

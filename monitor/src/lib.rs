@@ -10,6 +10,11 @@
 //! `ekf` (filter core) → `bank` (one filter per leak hypothesis) →
 //! `decision` (evidence, verdict, alarm latching) → `monitor` (the entry
 //! point, with `signal` checking the inputs).
+//!
+//! For the device: `signal::frontend` (ADC codes → engineering units,
+//! NAMUR NE43), `alarm` (the fail-safe relay and alarm state machine),
+//! `protocol` (the CAN frames, E2E protection, frame scheduling),
+//! `deadline` and `supervisor` (the 1 ms deadline and the watchdog).
 #![no_std]
 #![deny(missing_docs)]
 // `!(x > 0.0)` is deliberate throughout: it is true for NaN, which must be
@@ -19,7 +24,9 @@
 // the same index; iterator chains over three arrays read worse.
 #![allow(clippy::needless_range_loop)]
 
+pub mod alarm;
 pub mod bank;
+pub mod deadline;
 pub mod decision;
 pub mod ekf;
 pub mod fluid;
@@ -28,11 +35,15 @@ pub mod load;
 pub mod model;
 pub mod monitor;
 pub mod params;
+pub mod protocol;
 pub mod quiet;
 pub mod real;
 pub mod sample;
 pub mod signal;
 pub mod status;
+pub mod supervisor;
+#[cfg(test)]
+mod testutil;
 pub mod valve;
 
 pub use hypothesis::Hypothesis;

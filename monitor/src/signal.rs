@@ -200,3 +200,9 @@ mod tests {
         assert_eq!(v.x_piston_m, 0.038);
     }
 }
+
+// The device side of the signal chain: ADC codes → loop current →
+// engineering units, NAMUR NE43 limits and fault debounce.
+pub mod current_loop;
+pub mod frontend;
+pub mod ne43;

@@ -1,0 +1,179 @@
+//! State shared between the high-priority estimator and the low-priority
+//! tasks. Atomics, or a critical section of a few instructions: the
+//! estimator never waits for a low-priority task.
+
+use core::cell::{Cell, RefCell};
+use core::sync::atomic::{AtomicBool, AtomicU32, AtomicU8, Ordering};
+
+use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
+use embassy_sync::blocking_mutex::Mutex;
+use embassy_sync::channel::Channel;
+use embassy_sync::signal::Signal;
+use monitor::alarm::AlarmOutput;
+use monitor::deadline::LoadReport;
+use monitor::protocol::outbox::Outbox;
+use monitor::protocol::{AlarmFrame, Command, Message};
+
+/// Something worth a log line, from the estimator (logged by the
+/// supervisor, so the estimator never waits for the log).
+#[derive(Clone, Copy, Debug, defmt::Format)]
+pub enum LogEvent {
+    /// A monitor event (alarm, sensor fault, data gap, filter reset).
+    Monitor {
+        /// Sample time, ms.
+        t_ms: u64,
+        /// The event.
+        event: monitor::Event,
+    },
+    /// The alarm output changed.
+    Alarm {
+        /// Sample time, ms.
+        t_ms: u64,
+        /// The new output.
+        output: AlarmOutput,
+    },
+    /// An acknowledge command was applied.
+    Acknowledged {
+        /// Sample time, ms.
+        t_ms: u64,
+        /// Whether a leak was latched.
+        was_latched: bool,
+    },
+    /// ADC data was lost.
+    Overrun {
+        /// Sample time after the overrun, ms.
+        t_ms: u64,
+        /// Samples lost.
+        lost: u32,
+    },
+}
+
+/// CAN counters since boot (wrapping).
+pub struct CanStats {
+    /// Frames queued for the bus.
+    pub sent: AtomicU32,
+    /// Frames dropped (transmit timeout, aborted).
+    pub dropped: AtomicU32,
+    /// Received command frames rejected (CRC, format, repeated counter).
+    pub rejected: AtomicU32,
+    /// Bus errors reported by the controller.
+    pub bus_errors: AtomicU32,
+}
+
+/// Everything shared between tasks.
+pub struct Shared {
+    outbox: Mutex<CriticalSectionRawMutex, RefCell<Outbox>>,
+    outbox_ready: Signal<CriticalSectionRawMutex, ()>,
+    /// The latest command received over CAN, for the estimator.
+    pub commands: Signal<CriticalSectionRawMutex, Command>,
+    log: Channel<CriticalSectionRawMutex, LogEvent, 16>,
+    log_dropped: AtomicU32,
+    /// Samples processed by the estimator (wrapping).
+    pub processed: AtomicU32,
+    /// Samples missed by the estimator (wrapping).
+    pub missed: AtomicU32,
+    /// The alarm state shown (`AlarmState::code`).
+    pub alarm_state: AtomicU8,
+    /// Set by the supervisor when the estimator stalled: relay off for good.
+    pub stalled: AtomicBool,
+    last_alarm: Mutex<CriticalSectionRawMutex, Cell<Option<AlarmFrame>>>,
+    last_load: Mutex<CriticalSectionRawMutex, Cell<LoadReport>>,
+    /// CAN counters.
+    pub can: CanStats,
+}
+
+impl Default for Shared {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Shared {
+    /// Nothing posted, nothing counted.
+    pub const fn new() -> Self {
+        Self {
+            outbox: Mutex::new(RefCell::new(Outbox::new())),
+            outbox_ready: Signal::new(),
+            commands: Signal::new(),
+            log: Channel::new(),
+            log_dropped: AtomicU32::new(0),
+            processed: AtomicU32::new(0),
+            missed: AtomicU32::new(0),
+            alarm_state: AtomicU8::new(0),
+            stalled: AtomicBool::new(false),
+            last_alarm: Mutex::new(Cell::new(None)),
+            last_load: Mutex::new(Cell::new(LoadReport {
+                processed: 0,
+                missed: 0,
+                overruns: 0,
+                load_pct: 0,
+                peak_pct: 0,
+            })),
+            can: CanStats {
+                sent: AtomicU32::new(0),
+                dropped: AtomicU32::new(0),
+                rejected: AtomicU32::new(0),
+                bus_errors: AtomicU32::new(0),
+            },
+        }
+    }
+
+    /// Queue a message for the CAN transmitter (never waits; replaces a
+    /// pending message of the same kind).
+    pub fn post(&self, msg: Message) {
+        self.outbox.lock(|o| o.borrow_mut().post(msg));
+        self.outbox_ready.signal(());
+    }
+
+    /// The most urgent queued message.
+    pub fn take_next(&self) -> Option<Message> {
+        self.outbox.lock(|o| o.borrow_mut().take_next())
+    }
+
+    /// Messages replaced in the outbox before they were sent (wrapping).
+    pub fn replaced(&self) -> u32 {
+        self.outbox.lock(|o| o.borrow().replaced())
+    }
+
+    /// Wait until something was posted.
+    pub async fn wait_for_messages(&self) {
+        self.outbox_ready.wait().await
+    }
+
+    /// Queue a log event (dropped and counted if the log is full).
+    pub fn log(&self, e: LogEvent) {
+        if self.log.try_send(e).is_err() {
+            self.log_dropped.fetch_add(1, Ordering::Relaxed);
+        }
+    }
+
+    /// The next queued log event.
+    pub fn next_log(&self) -> Option<LogEvent> {
+        self.log.try_receive().ok()
+    }
+
+    /// Log events dropped because the log was full (wrapping).
+    pub fn log_dropped(&self) -> u32 {
+        self.log_dropped.load(Ordering::Relaxed)
+    }
+
+    /// Remember the alarm frame last built by the estimator.
+    pub fn set_last_alarm(&self, f: AlarmFrame) {
+        self.last_alarm.lock(|c| c.set(Some(f)));
+    }
+
+    /// The alarm frame last built by the estimator.
+    pub fn last_alarm(&self) -> Option<AlarmFrame> {
+        self.last_alarm.lock(Cell::get)
+    }
+
+    /// Remember the last second's load report.
+    pub fn set_load(&self, r: LoadReport) {
+        self.last_load.lock(|c| c.set(r));
+    }
+
+    /// The last second's load report.
+    pub fn load(&self) -> LoadReport {
+        self.last_load.lock(Cell::get)
+    }
+}

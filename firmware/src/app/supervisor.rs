@@ -1,0 +1,117 @@
+//! The supervisor task (low priority, every 10 ms): feeds the watchdog
+//! only while the estimator keeps its deadline (`monitor::supervisor`),
+//! de-energises the relay for good when the estimator stalls (the
+//! watchdog then resets the board), drives the status LED, and writes the
+//! log: the estimator's events as they come, a summary every second.
+
+use core::sync::atomic::Ordering;
+
+use embassy_time::{Duration, Instant, Ticker};
+use monitor::alarm::AlarmState;
+use monitor::protocol::{AlarmFrame, Message};
+use monitor::supervisor::{Supervision, Supervisor, SupervisorConfig};
+
+use super::shared::{LogEvent, Shared};
+use crate::board::{RelayOutput, StatusLed, Watchdog};
+
+/// How often the estimator is checked.
+pub const CHECK_PERIOD: Duration = Duration::from_millis(10);
+
+/// Checks per summary log line.
+const SUMMARY_EVERY: u32 = 100;
+
+fn log_event(e: LogEvent) {
+    match e {
+        LogEvent::Monitor { t_ms, event } => defmt::info!("{=u64} ms: {}", t_ms, event),
+        LogEvent::Alarm { t_ms, output } => defmt::warn!(
+            "{=u64} ms: alarm output {} (latched {}, faulted channels {=u8:#x}), relay {}",
+            t_ms,
+            output.state,
+            output.latched,
+            output.faulted_channels,
+            if output.relay_energised() {
+                "energised"
+            } else {
+                "off"
+            }
+        ),
+        LogEvent::Acknowledged { t_ms, was_latched } => {
+            defmt::info!(
+                "{=u64} ms: alarm acknowledged (latched: {})",
+                t_ms,
+                was_latched
+            )
+        }
+        LogEvent::Overrun { t_ms, lost } => {
+            defmt::warn!("{=u64} ms: ADC overrun, {} samples lost", t_ms, lost)
+        }
+    }
+}
+
+/// Run the supervisor for ever.
+pub async fn run<W: Watchdog, R: RelayOutput, L: StatusLed>(
+    mut watchdog: W,
+    relay: &R,
+    mut led: L,
+    shared: &Shared,
+) -> ! {
+    let mut supervisor = Supervisor::new(SupervisorConfig::DEFAULT);
+    let mut ticker = Ticker::every(CHECK_PERIOD);
+    let mut checks = 0u32;
+    loop {
+        ticker.next().await;
+        let now_ms = Instant::now().as_millis();
+        let processed = shared.processed.load(Ordering::Acquire);
+        let missed = shared.missed.load(Ordering::Acquire);
+        match supervisor.check(processed, missed) {
+            Supervision::Feed => watchdog.feed(),
+            Supervision::Withhold => {}
+            Supervision::Stalled => {
+                if !shared.stalled.swap(true, Ordering::AcqRel) {
+                    relay.set_energised(false);
+                    shared
+                        .alarm_state
+                        .store(AlarmState::EstimatorStalled.code(), Ordering::Relaxed);
+                    if let Some(last) = shared.last_alarm() {
+                        shared.post(Message::Alarm(AlarmFrame {
+                            state: AlarmState::EstimatorStalled,
+                            relay_energised: false,
+                            changed_at_ms: now_ms as u32,
+                            ..last
+                        }));
+                    }
+                    defmt::error!(
+                        "estimator stalled after {} samples: relay off, watchdog no longer fed",
+                        processed
+                    );
+                }
+            }
+        }
+        let state = AlarmState::from_code(shared.alarm_state.load(Ordering::Relaxed))
+            .unwrap_or(AlarmState::Starting);
+        led.set(state.led_on(now_ms as u32));
+
+        while let Some(e) = shared.next_log() {
+            log_event(e);
+        }
+        checks = checks.wrapping_add(1);
+        if checks % SUMMARY_EVERY == 0 {
+            let load = shared.load();
+            defmt::info!(
+                "{=u64} s: {} | samples {} missed {} | load {}% peak {}% | CAN sent {} dropped {} replaced {} rejected {} bus errors {} | log dropped {}",
+                now_ms / 1000,
+                state,
+                processed,
+                missed,
+                load.load_pct,
+                load.peak_pct,
+                shared.can.sent.load(Ordering::Relaxed),
+                shared.can.dropped.load(Ordering::Relaxed),
+                shared.replaced(),
+                shared.can.rejected.load(Ordering::Relaxed),
+                shared.can.bus_errors.load(Ordering::Relaxed),
+                shared.log_dropped()
+            );
+        }
+    }
+}

@@ -1,0 +1,91 @@
+//! The board trait: what the application needs from the hardware. The
+//! STM32F405 implements it in `src/stm32/`; an emulated board can replay a
+//! recording instead of the ADC and report the relay and CAN frames.
+//!
+//! The traits use `async fn`: the tasks are spawned with concrete board
+//! types, whose futures the compiler checks directly (no `Send` bounds
+//! are needed on the traits).
+#![allow(async_fn_in_trait)]
+
+use monitor::protocol::{CanFrame, ResetCause};
+
+/// The ring buffer overran: at least one block of samples was lost.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, defmt::Format)]
+pub struct Overrun;
+
+/// Raw ADC data, one block per sample period (1 ms): several scans of all
+/// channels in `Channel::ALL` order, interleaved.
+pub trait SampleSource {
+    /// Wait for the next block. `Err(Overrun)` when data was lost; the
+    /// next call returns fresh data again.
+    async fn next_block(&mut self) -> Result<&[u16], Overrun>;
+}
+
+/// The fail-safe relay. `&self`, so that the estimator and the supervisor
+/// can both switch it (each write is atomic).
+pub trait RelayOutput: Sync {
+    /// Energise (healthy) or de-energise (alarm) the relay.
+    fn set_energised(&self, energised: bool);
+}
+
+/// A CAN transmit error.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, defmt::Format)]
+pub enum CanTxError {
+    /// The controller refused the frame.
+    Rejected,
+}
+
+/// The CAN transmitter.
+pub trait CanTransmit {
+    /// Queue `frame` for transmission; waits while every transmit buffer
+    /// is full (callers bound the wait with a timeout).
+    async fn transmit(&mut self, frame: &CanFrame) -> Result<(), CanTxError>;
+
+    /// Abort frames still waiting for the bus (after a timeout: bus off
+    /// or no other node acknowledging). Returns how many were aborted.
+    fn abort_pending(&mut self) -> u8;
+}
+
+/// A CAN receive error.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, defmt::Format)]
+pub enum CanRxError {
+    /// A bus error (stuff, form, ACK, bit, CRC error) was reported.
+    Bus,
+    /// A frame that is not a classic data frame with a standard identifier.
+    Unsupported,
+}
+
+/// The CAN receiver (filtered to the command frame where the hardware
+/// can filter).
+pub trait CanReceive {
+    /// Wait for the next frame.
+    async fn receive(&mut self) -> Result<CanFrame, CanRxError>;
+}
+
+/// The independent watchdog, already running.
+pub trait Watchdog {
+    /// Reload it.
+    fn feed(&mut self);
+}
+
+/// A free-running cycle counter (DWT CYCCNT on the Cortex-M4).
+pub trait CycleCounter {
+    /// CPU cycles per sample period (168 000 at 168 MHz and 1 kHz).
+    const CYCLES_PER_SAMPLE: u32;
+
+    /// The counter now (wrapping).
+    fn cycles(&self) -> u32;
+}
+
+/// The status LED.
+pub trait StatusLed {
+    /// Light it or not.
+    fn set(&mut self, on: bool);
+}
+
+/// Facts about the board read once at boot.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, defmt::Format)]
+pub struct BootInfo {
+    /// Why the board last reset.
+    pub reset_cause: ResetCause,
+}

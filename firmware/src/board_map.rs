@@ -1,0 +1,153 @@
+//! The board map of the STM32F405 leak monitor: every pin and every
+//! analogue component, in one place. The README's wiring table is this
+//! file; change both together.
+//!
+//! | signal | pin | ADC1 | front end |
+//! |---|---|---|---|
+//! | supply pressure p_supply | PA0 | IN0 | 4–20 mA, 0–250 bar, 120 Ω shunt |
+//! | piston-chamber pressure p_piston | PA1 | IN1 | 4–20 mA, 0–250 bar, 120 Ω shunt |
+//! | rod-chamber pressure p_rod | PA2 | IN2 | 4–20 mA, 0–250 bar, 120 Ω shunt |
+//! | tank pressure p_tank | PA3 | IN3 | 4–20 mA, 0–16 bar, 120 Ω shunt |
+//! | piston position x_piston | PC0 | IN10 | 4–20 mA, 0–200 mm, 120 Ω shunt |
+//! | valve command u_valve | PC1 | IN11 | ±10 V via 100 kΩ / 30.1 kΩ to 3.3 V / 43.2 kΩ to GND |
+//! | oil temperature temp_oil (optional) | PC2 | IN12 | 4–20 mA, −20…130 °C, 120 Ω shunt |
+//! | fail-safe relay driver | PB12 | | high = energised = healthy; 100 kΩ pull-down on the driver input |
+//! | status LED | PC12 | | high = on (Olimex STM32-H405 STAT LED) |
+//! | CAN1 RX / TX | PB8 / PB9 | | 3.3 V transceiver (e.g. TJA1051T/3, SN65HVD230), 500 kbit/s |
+//! | HSE | PH0 / PH1 | | 8 MHz crystal → 168 MHz |
+//! | SWD | PA13 / PA14 | | probe (flashing, RTT log) |
+//!
+//! Each analogue input has a 1 kΩ series resistor, 10 nF to ground at the
+//! pin (fc ≈ 16 kHz, anti-aliasing for the 4 kHz scan) and a clamp to the
+//! 3.3 V rail. A 120 Ω shunt turns 4–20 mA into 0.48–2.4 V; the NE43
+//! fault limits 3.6 / 21 mA are 0.43 / 2.52 V, inside the ADC range, so a
+//! broken or shorted loop is seen as such.
+//!
+//! The analogue part (ranges, shunts, divider, sampling rate) builds
+//! without the HAL, so an emulated board can feed the same front end; the
+//! pin assignment needs the `stm32` feature.
+
+#[cfg(feature = "stm32")]
+use embassy_stm32::adc::{AdcChannel, AnyAdcChannel, SampleTime};
+#[cfg(feature = "stm32")]
+use embassy_stm32::peripherals::{ADC1, CAN1, DMA2_CH0, IWDG, PB12, PB8, PB9, PC12, TIM3};
+#[cfg(feature = "stm32")]
+use embassy_stm32::{Peri, Peripherals};
+use monitor::signal::current_loop::{AdcSpec, CurrentLoop, OffsetDivider};
+use monitor::signal::frontend::{FrontendConfig, Input, CHANNELS};
+use monitor::signal::ne43::DebounceConfig;
+
+/// Scans of all channels per 1 ms sample, averaged (oversampling).
+pub const SCANS_PER_SAMPLE: usize = 4;
+/// ADC trigger rate (TIM3 update → TRGO), Hz.
+pub const SCAN_RATE_HZ: u32 = 1000 * SCANS_PER_SAMPLE as u32;
+/// Codes per 1 ms block.
+pub const BLOCK_LEN: usize = SCANS_PER_SAMPLE * CHANNELS;
+/// ADC sample time per channel: 144 ADC clocks at 21 MHz (6.9 µs; a scan
+/// of 7 channels takes 52 µs of the 250 µs between triggers).
+#[cfg(feature = "stm32")]
+pub const ADC_SAMPLE_TIME: SampleTime = SampleTime::CYCLES144;
+
+/// Is the optional oil-temperature transmitter fitted? If not, PC2 is
+/// not read and the monitor runs without temperature compensation.
+pub const TEMP_OIL_FITTED: bool = false;
+
+/// GPIO port of the relay driver (0 = A, 1 = B, …), for the fault handler.
+pub const RELAY_PORT: u8 = 1;
+/// GPIO pin of the relay driver.
+pub const RELAY_PIN: u8 = 12;
+
+const SHUNT_OHM: f32 = 120.0;
+
+const fn pressure(full_scale_bar: f32) -> Input {
+    Input::Loop(CurrentLoop {
+        shunt_ohm: SHUNT_OHM,
+        at_4ma: 0.0,
+        at_20ma: full_scale_bar,
+    })
+}
+
+/// The analogue front end, in `Channel::ALL` order.
+pub const FRONTEND: FrontendConfig = FrontendConfig {
+    adc: AdcSpec {
+        vref_v: 3.3,
+        full_scale_counts: 4095.0,
+    },
+    inputs: [
+        pressure(250.0),
+        pressure(250.0),
+        pressure(250.0),
+        pressure(16.0),
+        Input::Loop(CurrentLoop {
+            shunt_ohm: SHUNT_OHM,
+            at_4ma: 0.0,
+            at_20ma: 0.2,
+        }),
+        Input::Divider(OffsetDivider {
+            r_in_ohm: 100e3,
+            r_up_ohm: 30.1e3,
+            r_down_ohm: 43.2e3,
+            units_per_volt: 0.1,
+        }),
+        if TEMP_OIL_FITTED {
+            Input::Loop(CurrentLoop {
+                shunt_ohm: SHUNT_OHM,
+                at_4ma: -20.0,
+                at_20ma: 130.0,
+            })
+        } else {
+            Input::NotFitted
+        },
+    ],
+    debounce: DebounceConfig::DEFAULT,
+};
+
+/// The board's peripherals, taken out of embassy's `Peripherals`.
+#[cfg(feature = "stm32")]
+pub struct Board {
+    /// ADC1, scanning the inputs.
+    pub adc: Peri<'static, ADC1>,
+    /// DMA2 stream 0 (ADC1 request).
+    pub adc_dma: Peri<'static, DMA2_CH0>,
+    /// TIM3, triggering the scans.
+    pub adc_trigger: Peri<'static, TIM3>,
+    /// The analogue inputs, in `Channel::ALL` order.
+    pub inputs: [AnyAdcChannel<'static, ADC1>; CHANNELS],
+    /// Relay driver.
+    pub relay: Peri<'static, PB12>,
+    /// Status LED.
+    pub led: Peri<'static, PC12>,
+    /// CAN1.
+    pub can: Peri<'static, CAN1>,
+    /// CAN1 RX.
+    pub can_rx: Peri<'static, PB8>,
+    /// CAN1 TX.
+    pub can_tx: Peri<'static, PB9>,
+    /// Independent watchdog.
+    pub iwdg: Peri<'static, IWDG>,
+}
+
+/// Assign the pins.
+#[cfg(feature = "stm32")]
+pub fn split(p: Peripherals) -> Board {
+    Board {
+        adc: p.ADC1,
+        adc_dma: p.DMA2_CH0,
+        adc_trigger: p.TIM3,
+        inputs: [
+            p.PA0.degrade_adc(),
+            p.PA1.degrade_adc(),
+            p.PA2.degrade_adc(),
+            p.PA3.degrade_adc(),
+            p.PC0.degrade_adc(),
+            p.PC1.degrade_adc(),
+            p.PC2.degrade_adc(),
+        ],
+        relay: p.PB12,
+        led: p.PC12,
+        can: p.CAN1,
+        can_rx: p.PB8,
+        can_tx: p.PB9,
+        iwdg: p.IWDG,
+    }
+}

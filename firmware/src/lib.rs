@@ -1,0 +1,26 @@
+//! The leak monitor's application, independent of the chip.
+//!
+//! Everything that decides anything is in the `monitor` crate (and tested
+//! on the host); this crate runs it: four tasks, written against the small
+//! board trait of [`board`], so the same tasks run on the STM32F405
+//! (`src/main.rs`, `src/stm32/`) and on an emulated board.
+//!
+//! - [`app::estimator`] (high priority): one ADC block per millisecond →
+//!   front end → `Monitor::step` → alarm logic → relay → frame scheduling.
+//! - [`app::can_tx`], [`app::can_rx`] (low priority): frames out of the
+//!   outbox with timeouts; the acknowledge command in.
+//! - [`app::supervisor`] (low priority): watchdog fed only while the
+//!   estimator keeps its deadline; relay off if it stalls; status LED;
+//!   periodic log.
+//!
+//! Another board (e.g. an emulated one) depends on this crate with
+//! `default-features = false`, implements the traits of [`board`],
+//! provides an embassy-time driver, a `critical-section` implementation
+//! and a defmt logger, defines a `static` [`app::shared::Shared`], and
+//! wraps the `run` functions in its own tasks (`src/main.rs` shows how).
+#![no_std]
+#![deny(missing_docs)]
+
+pub mod app;
+pub mod board;
+pub mod board_map;

@@ -1,0 +1,7 @@
+//! The STM32F405 board: the board trait implemented on embassy-stm32.
+
+pub mod adc;
+pub mod can;
+pub mod clocks;
+pub mod relay;
+pub mod system;

@@ -1,0 +1,114 @@
+//! Core services of the STM32 board: reset cause, DWT cycle counter,
+//! independent watchdog, status LED, and the fault handler that
+//! de-energises the relay.
+
+use embassy_stm32::gpio::{Level, Output, Speed};
+use embassy_stm32::pac;
+use embassy_stm32::peripherals::{IWDG, PC12};
+use embassy_stm32::wdg::IndependentWatchdog;
+use embassy_stm32::Peri;
+use monitor::protocol::ResetCause;
+
+use super::clocks::SYSCLK_HZ;
+use firmware::app::SAMPLE_PERIOD_US;
+use firmware::board::{CycleCounter, StatusLed, Watchdog};
+
+/// Watchdog timeout, µs. The LSI clock of the F405 may run anywhere from
+/// 17 to 47 kHz, so the real timeout is 170–470 ms; the supervisor feeds
+/// every 10 ms while the estimator keeps its deadline.
+pub const WATCHDOG_TIMEOUT_US: u32 = 250_000;
+
+/// Why the chip last reset; clears the flags so the next reset reads
+/// fresh ones.
+pub fn take_reset_cause() -> ResetCause {
+    let csr = pac::RCC.csr().read();
+    let cause = if csr.wdgrstf() {
+        ResetCause::Watchdog
+    } else if csr.wwdgrstf() {
+        ResetCause::WindowWatchdog
+    } else if csr.lpwrrstf() {
+        ResetCause::LowPower
+    } else if csr.sftrstf() {
+        ResetCause::Software
+    } else if csr.porrstf() {
+        ResetCause::PowerOn
+    } else if csr.borrstf() {
+        ResetCause::BrownOut
+    } else if csr.padrstf() {
+        ResetCause::Pin
+    } else {
+        ResetCause::Unknown
+    };
+    pac::RCC.csr().modify(|w| w.set_rmvf(true));
+    cause
+}
+
+/// The DWT cycle counter.
+pub struct Dwt;
+
+impl Dwt {
+    /// Enable the cycle counter.
+    pub fn new(mut dcb: cortex_m::peripheral::DCB, mut dwt: cortex_m::peripheral::DWT) -> Self {
+        dcb.enable_trace();
+        dwt.enable_cycle_counter();
+        Self
+    }
+}
+
+impl CycleCounter for Dwt {
+    const CYCLES_PER_SAMPLE: u32 = (SYSCLK_HZ as u64 * SAMPLE_PERIOD_US as u64 / 1_000_000) as u32;
+
+    fn cycles(&self) -> u32 {
+        cortex_m::peripheral::DWT::cycle_count()
+    }
+}
+
+/// The independent watchdog, started.
+pub struct Iwdg(IndependentWatchdog<'static, IWDG>);
+
+impl Iwdg {
+    /// Start the watchdog (it cannot be stopped again). It pauses while
+    /// a debugger halts the core, so a breakpoint does not reset the board.
+    pub fn start(iwdg: Peri<'static, IWDG>) -> Self {
+        pac::DBGMCU.apb1fzr().modify(|w| w.set_iwdg(true));
+        let mut w = IndependentWatchdog::new(iwdg, WATCHDOG_TIMEOUT_US);
+        w.unleash();
+        Self(w)
+    }
+}
+
+impl Watchdog for Iwdg {
+    fn feed(&mut self) {
+        self.0.pet();
+    }
+}
+
+/// The status LED on PC12.
+pub struct Led(Output<'static>);
+
+impl Led {
+    /// Configure the pin, LED off.
+    pub fn new(pin: Peri<'static, PC12>) -> Self {
+        Self(Output::new(pin, Level::Low, Speed::Low))
+    }
+}
+
+impl StatusLed for Led {
+    fn set(&mut self, on: bool) {
+        self.0.set_level(if on { Level::High } else { Level::Low });
+    }
+}
+
+/// Hard fault (a panic ends here too, through panic-probe's `udf`):
+/// de-energise the relay at once. With a debugger attached, stop for it;
+/// otherwise reset (the heartbeat then reports a software reset).
+#[cortex_m_rt::exception]
+unsafe fn HardFault(_frame: &cortex_m_rt::ExceptionFrame) -> ! {
+    super::relay::force_off();
+    if cortex_m::peripheral::DCB::is_debugger_attached() {
+        loop {
+            cortex_m::asm::bkpt();
+        }
+    }
+    cortex_m::peripheral::SCB::sys_reset()
+}

@@ -1,0 +1,110 @@
+//! Frames produced by the monitor's CAN encoder, with the physical value of
+//! every signal, one JSON object per line:
+//! `{"id": 769, "message": "LM_Status", "data": "hex", "signals": {...}}`
+//! (`null`: not available). `scripts/check_dbc.py` decodes the frames with
+//! `cantools` against `can/leak-monitor.dbc` and compares every signal.
+//!
+//! `cargo run -p host-sim --example can_vectors`
+
+use monitor::alarm::{AlarmState, LeakKind};
+use monitor::protocol::{
+    AlarmFrame, Command, CommandFrame, DetailFrame, Encoder, HeartbeatFrame, Message, ResetCause,
+    StatusFrame,
+};
+use monitor::{Hypothesis, Verdict};
+use std::collections::BTreeMap;
+use std::io::Write;
+
+const VERDICTS: [Verdict; 5] = [
+    Verdict::Healthy,
+    Verdict::Internal,
+    Verdict::External,
+    Verdict::Both,
+    Verdict::SensorFault,
+];
+
+fn messages() -> Vec<Message> {
+    let mut v = Vec::new();
+    // 20 of a kind: the counter wraps 14 → 0 inside the set.
+    for i in 0..20i32 {
+        let flow = |k: i32| -> Option<i16> {
+            match (i + k) % 7 {
+                0 => None,
+                1 => Some(i16::MAX),
+                2 => Some(-i16::MAX),
+                n => Some((n * 1237 - 4000 + i * 13) as i16),
+            }
+        };
+        v.push(Message::Status(StatusFrame {
+            verdict: VERDICTS[i as usize % 5],
+            leak_internal_ml_min: flow(0),
+            leak_external_ml_min: flow(3),
+            health: (0x1357u32.wrapping_mul(i as u32 + 1) & 0xFFFF) as u16,
+        }));
+        v.push(Message::Alarm(AlarmFrame {
+            state: AlarmState::ALL[i as usize % 5],
+            latched: LeakKind::ALL[i as usize % 4],
+            relay_energised: i % 3 == 0,
+            faulted_channels: (i as u8).wrapping_mul(37),
+            changed_at_ms: (i as u32).wrapping_mul(0x2468_ACE1),
+        }));
+        v.push(Message::Detail(DetailFrame {
+            leading: Hypothesis::ALL[i as usize % 4],
+            leak_internal_sd_ml_min: if i % 5 == 0 {
+                None
+            } else {
+                Some((i * 13 % 255) as u8)
+            },
+            leak_external_sd_ml_min: if i % 6 == 1 {
+                None
+            } else {
+                Some(254 - i as u8)
+            },
+            valve_gain_extend_permille: if i % 4 == 2 {
+                None
+            } else {
+                Some((i * 311 - 3000) as i16)
+            },
+            valve_gain_retract_permille: Some(if i % 2 == 0 {
+                i16::MAX
+            } else {
+                -(i as i16) * 7
+            }),
+        }));
+        v.push(Message::Heartbeat(HeartbeatFrame {
+            reset_cause: ResetCause::ALL[i as usize % 8],
+            uptime_s: (i as u16).wrapping_mul(4099),
+            estimator_load_pct: (i * 11 % 256) as u8,
+            peak_load_pct: (255 - i * 3) as u8,
+            missed_samples: (i * 17 % 256) as u8,
+            adc_overruns: (i % 16) as u8,
+            can_tx_dropped: (15 - i % 16) as u8,
+        }));
+    }
+    v.push(Message::Command(CommandFrame {
+        command: Command::AcknowledgeAlarm,
+    }));
+    v
+}
+
+fn main() -> std::io::Result<()> {
+    let mut enc = Encoder::new();
+    let mut out = std::io::stdout().lock();
+    for msg in messages() {
+        let frame = enc.encode(&msg);
+        let signals: BTreeMap<&str, Option<f64>> = msg
+            .signals()
+            .iter()
+            .map(|s| (s.name, s.value.physical()))
+            .collect();
+        let data: String = frame.data().iter().map(|b| format!("{b:02X}")).collect();
+        let line = serde_json::json!({
+            "id": frame.id(),
+            "message": msg.kind().name(),
+            "data": data,
+            "signals": signals,
+        });
+        writeln!(out, "{line}")?;
+    }
+    Ok(())
+}

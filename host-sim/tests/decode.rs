@@ -1,0 +1,160 @@
+//! `host-sim decode` on candump logs written from the monitor's own
+//! encoder: decoded values, flagged CRC errors and counter jumps, strict
+//! exit status, malformed lines.
+
+use monitor::alarm::{AlarmState, LeakKind};
+use monitor::protocol::{AlarmFrame, CanFrame, Encoder, Message, StatusFrame};
+use monitor::Verdict;
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn host_sim(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_host-sim"))
+        .args(args)
+        .output()
+        .expect("host-sim runs")
+}
+
+fn line(t_us: u64, f: &CanFrame) -> String {
+    let hex: String = f.data().iter().map(|b| format!("{b:02X}")).collect();
+    format!(
+        "({}.{:06}) can0 {:03X}#{hex}\n",
+        t_us / 1_000_000,
+        t_us % 1_000_000,
+        f.id()
+    )
+}
+
+fn status(internal_ml_min: i16) -> Message {
+    Message::Status(StatusFrame {
+        verdict: Verdict::Internal,
+        leak_internal_ml_min: Some(internal_ml_min),
+        leak_external_ml_min: None,
+        health: 0x0040,
+    })
+}
+
+fn write_log(dir: &Path) -> std::path::PathBuf {
+    let mut enc = Encoder::new();
+    let mut log = String::from("# a candump log\n");
+    let alarm = Message::Alarm(AlarmFrame {
+        state: AlarmState::Leak,
+        latched: LeakKind::Internal,
+        relay_energised: false,
+        faulted_channels: 0,
+        changed_at_ms: 12_345,
+    });
+    log += &line(1_000_000, &enc.encode(&alarm));
+    log += &line(1_100_000, &enc.encode(&status(385)));
+    log += &line(1_200_000, &enc.encode(&status(386)));
+    // Corrupt one frame, lose two others.
+    let f = enc.encode(&status(387));
+    let mut bad: Vec<u8> = f.data().to_vec();
+    bad[2] ^= 0x01;
+    log += &line(1_300_000, &CanFrame::new(f.id(), &bad).unwrap());
+    enc.encode(&status(388));
+    log += &line(1_600_000, &enc.encode(&status(389)));
+    // Someone else's traffic.
+    log += "(1.700000) can0 123#DEADBEEF\n";
+    let p = dir.join("bus.log");
+    std::fs::write(&p, log).unwrap();
+    p
+}
+
+#[test]
+fn decodes_and_flags_crc_errors_and_counter_jumps() {
+    let dir = tempfile::tempdir().unwrap();
+    let log = write_log(dir.path());
+    let out = host_sim(&["decode", log.to_str().unwrap()]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines.len(), 6, "{text}");
+    assert!(lines[0].contains("LM_Alarm") && lines[0].contains("AlarmState=leak"));
+    assert!(lines[0].contains("LatchedLeak=internal") && lines[0].contains("ChangedAt=12345 ms"));
+    assert!(
+        lines[1].contains("(1.100000) can0 301 LM_Status"),
+        "{}",
+        lines[1]
+    );
+    assert!(
+        lines[1].contains("Verdict=internal LeakInternal=0.385 l/min LeakExternal=n/a Health=64")
+    );
+    assert!(lines[3].contains("BAD CRC"), "{}", lines[3]);
+    assert!(lines[4].contains("COUNTER JUMP (2 lost)"), "{}", lines[4]);
+    assert!(lines[4].contains("LeakInternal=0.389 l/min"));
+    assert!(lines[5].contains("not a leak-monitor frame"));
+    let summary = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        summary.contains("6 frames: 4 decoded, 1 bad CRC"),
+        "{summary}"
+    );
+    assert!(
+        summary.contains("1 counter jumps (2 frames lost)"),
+        "{summary}"
+    );
+}
+
+#[test]
+fn json_output_and_strict_exit_status() {
+    let dir = tempfile::tempdir().unwrap();
+    let log = write_log(dir.path());
+    let out = host_sim(&["decode", "--json", "--strict", log.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(1), "strict: errors were seen");
+    let records: Vec<serde_json::Value> = String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    let outcomes: Vec<&str> = records
+        .iter()
+        .map(|r| r["outcome"].as_str().unwrap())
+        .collect();
+    assert_eq!(
+        outcomes,
+        ["ok", "ok", "ok", "bad_crc", "counter_jump", "foreign"]
+    );
+    assert_eq!(records[1]["signals"]["LeakInternal"], 0.385);
+    assert!(records[1]["signals"]["LeakExternal"].is_null());
+    assert_eq!(records[4]["lost"], 2);
+    assert_eq!(records[1]["counter"], 0);
+    assert_eq!(records[4]["counter"], 4);
+
+    // A clean log passes --strict.
+    let mut enc = Encoder::new();
+    let clean = dir.path().join("clean.log");
+    let text: String = (0..20)
+        .map(|i| line(i * 100_000, &enc.encode(&status(i as i16))))
+        .collect();
+    std::fs::write(&clean, text).unwrap();
+    let out = host_sim(&["decode", "--strict", clean.to_str().unwrap()]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+#[test]
+fn a_malformed_line_is_an_error_naming_file_and_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("bad.log");
+    std::fs::write(
+        &p,
+        "(1.000000) can0 301#0011223344556677\n(1.1) can0 301#00112\n",
+    )
+    .unwrap();
+    let out = host_sim(&["decode", p.to_str().unwrap()]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("bad.log:2:") && err.contains("bad data"),
+        "{err}"
+    );
+    let out = host_sim(&["decode", dir.path().join("missing.log").to_str().unwrap()]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("missing.log: cannot open"));
+}

@@ -1,0 +1,455 @@
+//! Protocol tests: every frame round-trips, corrupted frames are caught,
+//! counters are checked, the monitor's floats are quantised as documented.
+
+use super::*;
+use crate::alarm::{AlarmState, LeakKind};
+use crate::hypothesis::Hypothesis;
+use crate::status::{health, Verdict};
+use crate::testutil;
+
+/// One message of every kind, with values away from zero in every field.
+pub(crate) fn one_of_each() -> [Message; MessageKind::COUNT] {
+    [
+        Message::Alarm(AlarmFrame {
+            state: AlarmState::Leak,
+            latched: LeakKind::Both,
+            relay_energised: false,
+            faulted_channels: 0b0100_0101,
+            changed_at_ms: 4_000_000_123,
+        }),
+        Message::Status(StatusFrame {
+            verdict: Verdict::External,
+            leak_internal_ml_min: Some(-12),
+            leak_external_ml_min: Some(385),
+            health: health::ALARM_LATCHED | health::MODEL_MISMATCH | health::TIME_NOT_INCREASING,
+        }),
+        Message::Detail(DetailFrame {
+            leading: Hypothesis::Both,
+            leak_internal_sd_ml_min: Some(17),
+            leak_external_sd_ml_min: None,
+            valve_gain_extend_permille: Some(-53),
+            valve_gain_retract_permille: Some(1234),
+        }),
+        Message::Heartbeat(HeartbeatFrame {
+            reset_cause: ResetCause::Watchdog,
+            uptime_s: 54_321,
+            estimator_load_pct: 37,
+            peak_load_pct: 142,
+            missed_samples: 3,
+            adc_overruns: 1,
+            can_tx_dropped: 15,
+        }),
+        Message::Command(CommandFrame {
+            command: Command::AcknowledgeAlarm,
+        }),
+    ]
+}
+
+#[test]
+fn every_frame_type_round_trips() {
+    let mut enc = Encoder::new();
+    let mut dec = Decoder::new();
+    for msg in one_of_each() {
+        let frame = enc.encode(&msg);
+        assert_eq!(frame.id(), msg.kind().id());
+        assert_eq!(frame.data().len(), FRAME_LEN);
+        let r = dec.decode(&frame).unwrap();
+        assert_eq!(r.message, msg);
+        assert_eq!(r.counter, 0);
+        assert_eq!(r.sequence, Sequence::First);
+    }
+}
+
+#[test]
+fn not_available_and_extreme_values_round_trip() {
+    let mut enc = Encoder::new();
+    let mut dec = Decoder::new();
+    let msgs = [
+        Message::Status(StatusFrame {
+            verdict: Verdict::SensorFault,
+            leak_internal_ml_min: None,
+            leak_external_ml_min: Some(-i16::MAX),
+            health: u16::MAX,
+        }),
+        Message::Detail(DetailFrame {
+            leading: Hypothesis::Healthy,
+            leak_internal_sd_ml_min: Some(detail::SD_MAX_ML_MIN),
+            leak_external_sd_ml_min: Some(0),
+            valve_gain_extend_permille: None,
+            valve_gain_retract_permille: Some(i16::MAX),
+        }),
+        Message::Alarm(AlarmFrame {
+            state: AlarmState::EstimatorStalled,
+            latched: LeakKind::None,
+            relay_energised: true,
+            faulted_channels: 0xFF,
+            changed_at_ms: u32::MAX,
+        }),
+        Message::Heartbeat(HeartbeatFrame {
+            reset_cause: ResetCause::Unknown,
+            uptime_s: u16::MAX,
+            estimator_load_pct: 255,
+            peak_load_pct: 255,
+            missed_samples: 255,
+            adc_overruns: 0,
+            can_tx_dropped: 0,
+        }),
+    ];
+    for msg in msgs {
+        assert_eq!(dec.decode(&enc.encode(&msg)).unwrap().message, msg);
+    }
+}
+
+#[test]
+fn every_enumerated_value_round_trips() {
+    let mut enc = Encoder::new();
+    let mut dec = Decoder::new();
+    for state in AlarmState::ALL {
+        for latched in LeakKind::ALL {
+            let msg = Message::Alarm(AlarmFrame {
+                state,
+                latched,
+                relay_energised: state.relay_energised(),
+                faulted_channels: 0,
+                changed_at_ms: 1,
+            });
+            assert_eq!(dec.decode(&enc.encode(&msg)).unwrap().message, msg);
+        }
+    }
+    for verdict in [
+        Verdict::Healthy,
+        Verdict::Internal,
+        Verdict::External,
+        Verdict::Both,
+        Verdict::SensorFault,
+    ] {
+        let msg = Message::Status(StatusFrame {
+            verdict,
+            leak_internal_ml_min: Some(1),
+            leak_external_ml_min: Some(2),
+            health: 0,
+        });
+        assert_eq!(dec.decode(&enc.encode(&msg)).unwrap().message, msg);
+    }
+    for leading in Hypothesis::ALL {
+        let msg = Message::Detail(DetailFrame {
+            leading,
+            leak_internal_sd_ml_min: None,
+            leak_external_sd_ml_min: None,
+            valve_gain_extend_permille: None,
+            valve_gain_retract_permille: None,
+        });
+        assert_eq!(dec.decode(&enc.encode(&msg)).unwrap().message, msg);
+    }
+    for reset_cause in ResetCause::ALL {
+        let msg = Message::Heartbeat(HeartbeatFrame {
+            reset_cause,
+            uptime_s: 0,
+            estimator_load_pct: 0,
+            peak_load_pct: 0,
+            missed_samples: 0,
+            adc_overruns: 0,
+            can_tx_dropped: 0,
+        });
+        assert_eq!(dec.decode(&enc.encode(&msg)).unwrap().message, msg);
+    }
+}
+
+#[test]
+fn crc_errors_are_detected_in_every_frame_type() {
+    let mut enc = Encoder::new();
+    for msg in one_of_each() {
+        let frame = enc.encode(&msg);
+        for byte in 0..FRAME_LEN {
+            for bit in 0..8 {
+                let mut data = [0u8; FRAME_LEN];
+                data.copy_from_slice(frame.data());
+                data[byte] ^= 1 << bit;
+                let bad = CanFrame::new(frame.id(), &data).unwrap();
+                let err = Decoder::new().decode(&bad).unwrap_err();
+                assert!(
+                    matches!(err, DecodeError::E2e { kind, .. } if kind == msg.kind()),
+                    "{:?} byte {byte} bit {bit}: {err:?}",
+                    msg.kind()
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn a_frame_under_the_wrong_identifier_fails_its_crc() {
+    // The Data ID (= identifier) is in the CRC: a status payload sent as
+    // a detail frame is rejected, not misread.
+    let mut enc = Encoder::new();
+    let status = enc.encode(&one_of_each()[1]);
+    let moved = CanFrame::new(MessageKind::Detail.id(), status.data()).unwrap();
+    assert!(matches!(
+        Decoder::new().decode(&moved),
+        Err(DecodeError::E2e {
+            kind: MessageKind::Detail,
+            error: E2eError::Crc { .. }
+        })
+    ));
+}
+
+#[test]
+fn counter_jumps_and_repeats_are_reported() {
+    let mut enc = Encoder::new();
+    let mut dec = Decoder::new();
+    let msg = one_of_each()[1];
+    let frames: heapless::Vec<CanFrame, 40> = (0..40).map(|_| enc.encode(&msg)).collect();
+    // In order across the wrap 14 → 0.
+    for (i, f) in frames[..20].iter().enumerate() {
+        let r = dec.decode(f).unwrap();
+        assert_eq!(r.counter as usize, i % 15);
+        let want = if i == 0 {
+            Sequence::First
+        } else {
+            Sequence::InOrder
+        };
+        assert_eq!(r.sequence, want, "frame {i}");
+    }
+    // Frame 19 again: repeated. Then 23 after 19: three lost.
+    assert_eq!(
+        dec.decode(&frames[19]).unwrap().sequence,
+        Sequence::Repeated
+    );
+    assert_eq!(dec.decode(&frames[23]).unwrap().sequence, Sequence::Lost(3));
+    // Counters are per frame kind: another kind starts fresh.
+    let alarm = enc.encode(&one_of_each()[0]);
+    assert_eq!(dec.decode(&alarm).unwrap().sequence, Sequence::First);
+}
+
+#[test]
+fn a_corrupted_frame_does_not_advance_the_counter_check() {
+    let mut enc = Encoder::new();
+    let mut dec = Decoder::new();
+    let msg = one_of_each()[1];
+    let a = enc.encode(&msg);
+    let b = enc.encode(&msg);
+    let mut data = [0u8; FRAME_LEN];
+    data.copy_from_slice(b.data());
+    data[3] ^= 0x10;
+    dec.decode(&a).unwrap();
+    assert!(dec.decode(&CanFrame::new(b.id(), &data).unwrap()).is_err());
+    assert_eq!(dec.decode(&b).unwrap().sequence, Sequence::InOrder);
+}
+
+#[test]
+fn foreign_and_malformed_frames_are_rejected() {
+    let mut dec = Decoder::new();
+    let unknown = CanFrame::new(0x123, &[0; 8]).unwrap();
+    assert_eq!(dec.decode(&unknown), Err(DecodeError::UnknownId(0x123)));
+    let mut enc = Encoder::new();
+    let f = enc.encode(&one_of_each()[1]);
+    let short = CanFrame::new(f.id(), &f.data()[..7]).unwrap();
+    assert_eq!(
+        dec.decode(&short),
+        Err(DecodeError::Length {
+            kind: MessageKind::Status,
+            len: 7
+        })
+    );
+    // Undefined codes with a valid CRC: field errors, not panics.
+    let field = |id: u16, mut data: [u8; 8]| {
+        e2e::protect(id, &mut data, 0);
+        Decoder::new().decode(&CanFrame::new(id, &data).unwrap())
+    };
+    assert!(matches!(
+        field(0x301, [0, 0x50, 0, 0, 0, 0, 0, 0]),
+        Err(DecodeError::Field {
+            error: FieldError {
+                field: "Verdict",
+                raw: 5
+            },
+            ..
+        })
+    ));
+    assert!(matches!(
+        field(0x300, [0, 0x50, 0, 0, 0, 0, 0, 0]),
+        Err(DecodeError::Field {
+            error: FieldError {
+                field: "AlarmState",
+                raw: 5
+            },
+            ..
+        })
+    ));
+    assert!(matches!(
+        field(0x303, [0, 0x80, 0, 0, 0, 0, 0, 0]),
+        Err(DecodeError::Field {
+            error: FieldError {
+                field: "ResetCause",
+                raw: 8
+            },
+            ..
+        })
+    ));
+    assert!(matches!(
+        field(0x310, [0, 0x20, 0, 0, 0, 0, 0, 0]),
+        Err(DecodeError::Field {
+            error: FieldError {
+                field: "Command",
+                raw: 2
+            },
+            ..
+        })
+    ));
+    assert!(matches!(
+        field(0x310, [0, 0x10, 0, 0, 0, 0, 0, 1]),
+        Err(DecodeError::Field {
+            error: FieldError {
+                field: "Reserved",
+                raw: 1
+            },
+            ..
+        })
+    ));
+    assert!(field(0x310, [0, 0x10, 0, 0, 0, 0, 0, 0]).is_ok());
+}
+
+#[test]
+fn embedded_can_frames_decode_the_same() {
+    use embedded_can::{Frame, StandardId};
+    let mut enc = Encoder::new();
+    let f = enc.encode(&one_of_each()[0]);
+    let g = <CanFrame as Frame>::new(StandardId::new(f.id()).unwrap(), f.data()).unwrap();
+    assert_eq!(Decoder::new().decode(&g).unwrap().message, one_of_each()[0]);
+    assert!(
+        <CanFrame as Frame>::new(embedded_can::ExtendedId::new(0x300).unwrap(), &[0; 8]).is_none()
+    );
+    assert!(CanFrame::new(0x800, &[]).is_none() && CanFrame::new(0x300, &[0; 9]).is_none());
+}
+
+#[test]
+fn status_values_are_rounded_and_saturated() {
+    let mut s = testutil::status();
+    s.verdict = Verdict::Both;
+    s.leak_internal_lpm = Some(0.3856);
+    s.leak_external_lpm = Some(-0.0004);
+    s.health = health::ALARM_LATCHED;
+    let f = StatusFrame::from_status(&s);
+    assert_eq!(f.leak_internal_ml_min, Some(386));
+    assert_eq!(f.leak_external_ml_min, Some(0));
+    assert_eq!(f.verdict, Verdict::Both);
+    assert_eq!(f.health, health::ALARM_LATCHED);
+    s.leak_internal_lpm = Some(1e6);
+    s.leak_external_lpm = Some(f32::NEG_INFINITY);
+    let f = StatusFrame::from_status(&s);
+    assert_eq!(f.leak_internal_ml_min, Some(i16::MAX));
+    assert_eq!(f.leak_external_ml_min, Some(-i16::MAX));
+    s.leak_internal_lpm = None;
+    s.leak_external_lpm = Some(f32::NAN);
+    let f = StatusFrame::from_status(&s);
+    assert_eq!(
+        (f.leak_internal_ml_min, f.leak_external_ml_min),
+        (None, None)
+    );
+}
+
+#[test]
+fn detail_values_are_rounded_and_saturated() {
+    let mut s = testutil::status();
+    s.leading = Hypothesis::Internal;
+    s.leak_internal_sd_lpm = Some(0.0124);
+    s.leak_external_sd_lpm = Some(3.0);
+    s.valve_gain_deviation = [0.0526, -0.0004];
+    let f = DetailFrame::from_status(&s);
+    assert_eq!(f.leading, Hypothesis::Internal);
+    assert_eq!(f.leak_internal_sd_ml_min, Some(12));
+    assert_eq!(f.leak_external_sd_ml_min, Some(detail::SD_MAX_ML_MIN));
+    assert_eq!(f.valve_gain_extend_permille, Some(53));
+    assert_eq!(f.valve_gain_retract_permille, Some(0));
+    s.leak_internal_sd_lpm = None;
+    s.valve_gain_deviation = [f32::NAN, 100.0];
+    let f = DetailFrame::from_status(&s);
+    assert_eq!(f.leak_internal_sd_ml_min, None);
+    assert_eq!(f.valve_gain_extend_permille, None);
+    assert_eq!(f.valve_gain_retract_permille, Some(i16::MAX));
+}
+
+#[test]
+fn heartbeat_nibbles_saturate() {
+    let msg = Message::Heartbeat(HeartbeatFrame {
+        reset_cause: ResetCause::PowerOn,
+        uptime_s: 1,
+        estimator_load_pct: 1,
+        peak_load_pct: 1,
+        missed_samples: 1,
+        adc_overruns: 200,
+        can_tx_dropped: 16,
+    });
+    let r = Decoder::new().decode(&Encoder::new().encode(&msg)).unwrap();
+    let Message::Heartbeat(h) = r.message else {
+        panic!("not a heartbeat: {r:?}");
+    };
+    assert_eq!((h.adc_overruns, h.can_tx_dropped), (15, 15));
+}
+
+#[test]
+fn signals_name_every_field_with_its_physical_value() {
+    let [alarm, status, detail, heartbeat, command] = one_of_each();
+    let names = |m: &Message| -> heapless::Vec<&'static str, 12> {
+        m.signals().iter().map(|s| s.name).collect()
+    };
+    assert_eq!(
+        names(&alarm).as_slice(),
+        [
+            "AlarmState",
+            "LatchedLeak",
+            "RelayEnergised",
+            "FaultedChannels",
+            "ChangedAt"
+        ]
+    );
+    assert_eq!(
+        names(&status).as_slice(),
+        ["Verdict", "LeakInternal", "LeakExternal", "Health"]
+    );
+    assert_eq!(
+        names(&detail).as_slice(),
+        [
+            "Leading",
+            "LeakInternalSd",
+            "LeakExternalSd",
+            "ValveGainDevExtend",
+            "ValveGainDevRetract"
+        ]
+    );
+    assert_eq!(
+        names(&heartbeat).as_slice(),
+        [
+            "ResetCause",
+            "Uptime",
+            "EstimatorLoad",
+            "PeakLoad",
+            "MissedSamples",
+            "AdcOverruns",
+            "CanTxDropped"
+        ]
+    );
+    assert_eq!(names(&command).as_slice(), ["Command"]);
+    let s = status.signals();
+    assert_eq!(s[2].value.physical(), Some(0.385));
+    assert_eq!(s[1].value.physical(), Some(-0.012));
+    let d = detail.signals();
+    assert_eq!(d[2].value, SignalValue::NotAvailable);
+    assert!((d[4].value.physical().unwrap() - 123.4).abs() < 1e-9);
+    extern crate std;
+    use std::string::ToString;
+    assert_eq!(s[2].to_string(), "LeakExternal=0.385 l/min");
+    assert_eq!(s[0].to_string(), "Verdict=external");
+    assert_eq!(d[2].to_string(), "LeakExternalSd=n/a");
+}
+
+#[test]
+fn outbox_sends_the_alarm_before_the_status() {
+    let [alarm, status, ..] = one_of_each();
+    let mut o = outbox::Outbox::new();
+    o.post(status);
+    o.post(alarm);
+    assert_eq!(o.take_next(), Some(alarm));
+    assert_eq!(o.take_next(), Some(status));
+    assert_eq!(o.take_next(), None);
+}
