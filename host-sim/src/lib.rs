@@ -4,6 +4,7 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod eval;
+pub mod golden;
 pub mod recording;
 pub mod replay;
 pub mod sim;
