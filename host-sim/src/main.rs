@@ -196,6 +196,10 @@ fn run_golden(action: GoldenAction) -> Result<ExitCode> {
             warm_up,
             output,
         } => {
+            anyhow::ensure!(
+                recording.is_relative(),
+                "give the recording relative to the repository root (it is stored in the case)"
+            );
             let spec = golden::CaseSpec {
                 source: recording.to_string_lossy().replace('\\', "/"),
                 samples,
