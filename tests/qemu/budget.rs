@@ -148,7 +148,7 @@ fn main() -> ! {
         core::mem::size_of::<Status>()
     );
     println!(
-        "budget: stack high-water mark {} B in all (of {} B free after static data); Monitor::step and its callees {} B",
+        "budget: stack high-water mark {} B in all (of {} B free after static data); {} B below the bench loop (Monitor::step, its callees and the measuring frame)",
         painted.high_water(),
         painted.high_water() + painted.headroom(),
         step_stack
