@@ -29,7 +29,10 @@ cargo clippy --all-targets -- -D warnings
 step "clippy (monitor and firmware for the MCU)"
 cargo clippy -p monitor -p firmware --target thumbv7em-none-eabihf -- -D warnings
 
-step "host tests (monitor, host-sim)"
+step "clippy (on-target tests and benchmark for the MCU)"
+cargo clippy -p qemu-tests --target thumbv7em-none-eabihf --features qemu --all-targets -- -D warnings
+
+step "host tests (monitor, host-sim, golden; the goldens are up to date)"
 cargo test --workspace
 
 step "the DBC and the code agree (cantools decodes the Rust encoder's frames; host-sim decodes cantools')"
@@ -83,5 +86,21 @@ echo "firmware: flash ${flash} B, static RAM ${ram} B, stack estimate ${stack} B
 [ $((ram + stack)) -le $((48 * 1024)) ] || { echo "RAM $((ram + stack)) B over the 48 KiB budget"; exit 1; }
 # The application tasks build without the STM32 board (for other boards).
 cargo build -p firmware --lib --no-default-features --release --target thumbv7em-none-eabihf
+
+step "QEMU: qemu-system-arm (Debian)"
+if ! command -v qemu-system-arm >/dev/null; then
+  sudo=""
+  [ "$(id -u)" = 0 ] || sudo=sudo
+  export DEBIAN_FRONTEND=noninteractive
+  $sudo apt-get install -y --no-install-recommends qemu-system-arm ||
+    { $sudo apt-get update && $sudo apt-get install -y --no-install-recommends qemu-system-arm; }
+fi
+qemu-system-arm --version | sed -n 1p
+
+step "QEMU: the monitor on a Cortex-M4F is bit-identical with the host (goldens)"
+cargo qemu-test
+
+step "QEMU: instructions per Monitor::step, static RAM, stack (budget)"
+cargo qemu-bench
 
 step "all checks passed"

@@ -8,6 +8,7 @@
 pub mod calibrate;
 pub mod decode;
 pub mod eval;
+pub mod golden;
 pub mod recording;
 pub mod replay;
 pub mod sim;
