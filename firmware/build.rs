@@ -1,6 +1,13 @@
-//! Link script setup: `memory.x` (workspace root) is copied to OUT_DIR so
-//! editing it relinks, and defmt's script is added. `link.x` comes from
-//! `.cargo/config.toml` (see `../shared/notes/embedded-toolchain-facts.md`).
+//! Build-time setup of the firmware image.
+//!
+//! - Link scripts: `memory.x` (workspace root) is copied to OUT_DIR so
+//!   editing it relinks, and defmt's script is added. `link.x` comes from
+//!   `.cargo/config.toml` (see `../shared/notes/embedded-toolchain-facts.md`).
+//! - Installation parameters: if `LEAK_MONITOR_PARAMS` names a TOML file
+//!   (e.g. written by `host-sim calibrate`; relative paths are taken from
+//!   the workspace root), it is validated with the monitor's own rules and
+//!   compiled in as `INSTALLATION`; otherwise the reference rig's nominal
+//!   parameters are. A bad file fails the build, naming file and field.
 use std::path::PathBuf;
 
 fn main() {
@@ -10,4 +17,45 @@ fn main() {
     println!("cargo:rustc-link-search={}", out.display());
     println!("cargo:rerun-if-changed=../memory.x");
     println!("cargo:rustc-link-arg-bins=-Tdefmt.x");
+
+    println!("cargo:rerun-if-env-changed=LEAK_MONITOR_PARAMS");
+    let code = match std::env::var_os("LEAK_MONITOR_PARAMS").filter(|v| !v.is_empty()) {
+        None => "/// The reference rig's parameters (no `LEAK_MONITOR_PARAMS` given).\n\
+                 pub const INSTALLATION: Params = Params::NOMINAL;\n\
+                 /// Where the parameters came from.\n\
+                 pub const INSTALLATION_SOURCE: &str = \"nominal\";\n"
+            .to_string(),
+        Some(path) => {
+            let mut path = PathBuf::from(path);
+            if path.is_relative() {
+                path = root.join(path);
+            }
+            println!("cargo:rerun-if-changed={}", path.display());
+            let text = std::fs::read_to_string(&path)
+                .unwrap_or_else(|e| fail(&format!("LEAK_MONITOR_PARAMS {}: {e}", path.display())));
+            let params: monitor::Params = toml::from_str(&text)
+                .unwrap_or_else(|e| fail(&format!("LEAK_MONITOR_PARAMS {}: {e}", path.display())));
+            if let Err(e) = params.validate() {
+                fail(&format!("LEAK_MONITOR_PARAMS {}: {e}", path.display()));
+            }
+            // `Debug` of the (all-finite, validated) parameter structs is a
+            // Rust struct expression, and f64's Debug round-trips exactly.
+            format!(
+                "/// Parameters compiled in from `{}`.\n\
+                 pub const INSTALLATION: Params = {params:?};\n\
+                 /// Where the parameters came from.\n\
+                 pub const INSTALLATION_SOURCE: &str = {:?};\n",
+                path.display(),
+                path.file_name()
+                    .map(|n| n.to_string_lossy().into_owned())
+                    .unwrap_or_default()
+            )
+        }
+    };
+    std::fs::write(out.join("installation.rs"), code).unwrap();
+}
+
+fn fail(msg: &str) -> ! {
+    eprintln!("error: {msg}");
+    std::process::exit(1);
 }

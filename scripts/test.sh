@@ -48,7 +48,10 @@ fi
 step "monitor builds for thumbv7em-none-eabihf"
 cargo build -p monitor --release --target thumbv7em-none-eabihf
 
-step "firmware builds and links (release)"
+step "firmware builds with an installation's calibrated parameters compiled in"
+LEAK_MONITOR_PARAMS=examples/calibrated-rig21.toml cargo build -p firmware --release --target thumbv7em-none-eabihf
+
+step "firmware builds and links (release, reference parameters)"
 cargo build -p firmware --release --target thumbv7em-none-eabihf
 elf=target/thumbv7em-none-eabihf/release/firmware
 # A firmware built without the link script is a few bytes: fail loudly.

@@ -20,13 +20,21 @@ use firmware::app;
 use firmware::app::shared::Shared;
 use firmware::board::BootInfo;
 use firmware::board_map::{self, Board, FRONTEND};
-use monitor::{Monitor, Params};
+use monitor::Monitor;
 use static_cell::StaticCell;
 use stm32::adc::AdcSampler;
 use stm32::can::{Receiver, Transmitter};
 use stm32::relay::Relay;
 use stm32::system::{Dwt, Iwdg, Led};
 use {defmt_rtt as _, panic_probe as _};
+
+/// The installation's parameters, compiled in by `build.rs` from the TOML
+/// file named by `LEAK_MONITOR_PARAMS` (or the reference rig's).
+mod installation {
+    #![allow(clippy::all)]
+    use monitor::params::*;
+    include!(concat!(env!("OUT_DIR"), "/installation.rs"));
+}
 
 static SHARED: Shared = Shared::new();
 static RELAY: StaticCell<Relay> = StaticCell::new();
@@ -121,8 +129,13 @@ fn start(spawner: Spawner) {
         env!("CARGO_PKG_VERSION"),
         boot.reset_cause
     );
-    let monitor = match Monitor::new(&Params::nominal()) {
+    defmt::info!(
+        "installation parameters: {}",
+        installation::INSTALLATION_SOURCE
+    );
+    let monitor = match Monitor::new(&installation::INSTALLATION) {
         Ok(m) => MONITOR.init(m),
+        // Validated at build time (build.rs); kept as a last line of defence.
         Err(e) => defmt::panic!("invalid built-in parameters: {}", e.field),
     };
     let core = unwrap!(cortex_m::Peripherals::take());

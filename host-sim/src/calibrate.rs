@@ -479,17 +479,22 @@ fn replay_stats(
 }
 
 /// Golden-section search of the air fraction minimising the healthy NIS.
+/// The bulk modulus only shows in pressure transients, so a recording may
+/// not determine it: the fit is kept only if the optimum lies inside the
+/// search range and improves the NIS by at least 1 %.
 fn fit_air(
     samples: &[Sample],
     p: &mut Params,
     fits: &mut Vec<Fit>,
+    warnings: &mut Vec<String>,
 ) -> Result<(), CalibrationError> {
     let nis_at = |air: f64, p: &Params| -> Result<f64, CalibrationError> {
         let mut q = p.clone();
         q.fluid.air_fraction = air;
         Ok(replay_stats(samples, &q)?.0)
     };
-    let (mut lo, mut hi) = (0.002f64.ln(), 0.06f64.ln());
+    let (lo0, hi0) = (0.002f64.ln(), 0.06f64.ln());
+    let (mut lo, mut hi) = (lo0, hi0);
     let r = 0.618_033_988_749_895;
     let mut a = hi - r * (hi - lo);
     let mut b = lo + r * (hi - lo);
@@ -510,17 +515,25 @@ fn fit_air(
             fb = nis_at(b.exp(), p)?;
         }
     }
-    let (best, nis) = if fa < fb {
-        (a.exp(), fa)
-    } else {
-        (b.exp(), fb)
-    };
+    let (best, nis) = if fa < fb { (a, fa) } else { (b, fb) };
     let before = p.fluid.air_fraction;
-    p.fluid.air_fraction = best;
+    let nis_before = nis_at(before, p)?;
+    let margin = 0.05 * (hi0 - lo0);
+    let at_edge = best - lo0 < margin || hi0 - best < margin;
+    if at_edge || nis > 0.99 * nis_before {
+        warnings.push(format!(
+            "entrained air not determined by this recording (best {:.2} %{}, NIS {nis:.3} vs {nis_before:.3}); kept {:.2} %",
+            100.0 * best.exp(),
+            if at_edge { " at the search limit" } else { "" },
+            100.0 * before
+        ));
+        return Ok(());
+    }
+    p.fluid.air_fraction = best.exp();
     fits.push(Fit {
         what: "entrained air (effective bulk modulus)".into(),
-        value: format!("{:.2} % (was {:.2} %)", 100.0 * best, 100.0 * before),
-        quality: format!("healthy-filter mean NIS {nis:.2}"),
+        value: format!("{:.2} % (was {:.2} %)", 100.0 * best.exp(), 100.0 * before),
+        quality: format!("healthy-filter mean NIS {nis:.3} (was {nis_before:.3})"),
     });
     Ok(())
 }
@@ -545,7 +558,7 @@ pub fn calibrate(samples: &[Sample], start: &Params) -> Result<Calibration, Cali
     }
     fit_valve(&d, &mut p, &mut fits, &mut warnings);
     fit_load(&d, &mut p, &mut fits, &mut warnings);
-    fit_air(samples, &mut p, &mut fits)?;
+    fit_air(samples, &mut p, &mut fits, &mut warnings)?;
     // Healthy baseline: what the leak states still see becomes baseline.
     let (_, _, mean) = replay_stats(samples, &p)?;
     let per_bar = |theta: f64| theta * LEAK_UNIT * 1e5 * LPM_PER_M3S;

@@ -46,7 +46,13 @@ fn recovers_valve_and_load_of_a_different_rig() {
     assert!((p.friction.coulomb_n / truth.friction.coulomb_n - 1.0).abs() < 0.1);
     assert!((p.friction.viscous_ns_per_m / truth.friction.viscous_ns_per_m - 1.0).abs() < 0.1);
     assert!((p.load.gravity_scale / truth.load.gravity_scale - 1.0).abs() < 0.03);
-    assert!(cal.warnings.is_empty(), "{:?}", cal.warnings);
+    // The only acceptable warning: the air content is not always
+    // determined by a recording (it shows in pressure transients only).
+    assert!(
+        cal.warnings.iter().all(|w| w.starts_with("entrained air")),
+        "{:?}",
+        cal.warnings
+    );
     // On its own healthy recording the calibrated monitor's largest
     // detection reading stays below half the alarm level.
     let half = 0.5 * Params::nominal().alarm.alarm_lpm;
