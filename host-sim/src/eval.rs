@@ -260,6 +260,12 @@ fn load(path: &Path) -> anyhow::Result<Rows> {
         };
         rows.push((s, [f(ci), f(ce)]));
     }
+    if rows.is_empty() {
+        anyhow::bail!(
+            "{}: no samples (delete it to simulate the case again)",
+            path.display()
+        );
+    }
     Ok(rows)
 }
 

@@ -98,6 +98,9 @@ enum Command {
         /// Sample rate of the recording, Hz.
         #[arg(long, default_value_t = 1000.0)]
         rate: f64,
+        /// White noise on every pressure reading, bar (1σ).
+        #[arg(long)]
+        pressure_noise: Option<f64>,
         /// Simulate a rig that differs from nominal (seeded variation of
         /// valve, friction, mass, air, dead volumes, sensor offsets).
         #[arg(long)]
@@ -530,6 +533,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
             law,
             seed,
             rate,
+            pressure_noise,
             rig_seed,
             rig,
             no_truth,
@@ -574,6 +578,10 @@ fn run(cli: Cli) -> Result<ExitCode> {
                 (100.0..=20_000.0).contains(&rate),
                 "--rate must be within 100..20000 Hz"
             );
+            if let Some(n) = pressure_noise {
+                anyhow::ensure!(n >= 0.0 && n.is_finite(), "--pressure-noise must be ≥ 0");
+                scenario.sensors.pressure_noise_bar = n;
+            }
             if let Some(path) = &dump_rig {
                 let mut truth = rig_hw.plant.clone();
                 truth.sensors.pressure_offsets_bar = scenario.sensors.pressure_offsets_bar;
