@@ -73,8 +73,8 @@ impl SampleSource for ReplayAdc {
         Timer::at(due).await;
         let complete = (Instant::now() - self.t0).as_ticks() / BLOCK_PERIOD.as_ticks();
         if complete >= self.next as u64 + RING_BLOCKS {
-            // Overwritten before it was read: continue with the block
-            // being written now, as the STM32 ring buffer does.
+            // Overwritten before it was read (a whole ring behind):
+            // report it, then continue with the latest complete block.
             self.next = (complete as u32).min(self.case.samples);
             record::with(|l| l.overruns += 1);
             return Err(Overrun);

@@ -40,9 +40,10 @@ pub fn replay(case: &EmuCase, log: &Log, f: &mut Findings) {
 }
 
 /// The relay: written de-energised before the first sample; then changed
-/// exactly where the host's alarm output changes it, never during the
-/// warm-up, always agreeing with the alarm frames; de-energised when the
-/// estimator stalls.
+/// exactly where the host's alarm output changes it; off during the
+/// warm-up and energised at its end (unless the golden raised an alarm
+/// by then); always agreeing with the alarm frames; de-energised when
+/// the estimator stalls.
 pub fn relay(case: &EmuCase, log: &Log, frames: &Frames, f: &mut Findings) {
     let (Some(t0), Some(t_end)) = (log.t0, last_block(case, log)) else {
         return;
@@ -83,13 +84,25 @@ pub fn relay(case: &EmuCase, log: &Log, frames: &Frames, f: &mut Findings) {
             firmware
         ));
     }
-    if let Some(&(k, _)) = firmware.iter().find(|c| c.1) {
-        if k < case.warm_up_samples() {
-            f.fail(
-                Check::Relay,
-                format_args!("energised during the warm-up, at sample {k}"),
-            );
-        }
+    // Independently of the host's run: off through the warm-up, then
+    // energised at its end unless the golden raised an alarm by then.
+    let warm_up = case.warm_up_samples();
+    let early_alarm = EmuCase::decoded(case.golden_events)
+        .any(|(k, e)| k <= warm_up && matches!(e, Event::AlarmRaised(_)));
+    if !early_alarm && firmware.first() != Some(&(warm_up, true)) {
+        f.fail(
+            Check::Relay,
+            format_args!(
+                "not energised at the end of the warm-up (sample {warm_up}): first change {:?}",
+                firmware.first()
+            ),
+        );
+    }
+    if let Some(&(k, _)) = firmware.iter().find(|c| c.1 && c.0 < warm_up) {
+        f.fail(
+            Check::Relay,
+            format_args!("energised during the warm-up, at sample {k}"),
+        );
     }
     for d in &frames.list {
         if let (Some(k), monitor::protocol::Message::Alarm(a)) = (d.k, d.msg) {
