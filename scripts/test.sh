@@ -100,7 +100,7 @@ if ! command -v qemu-system-arm >/dev/null; then
 fi
 qemu-system-arm --version | sed -n 1p
 
-step "QEMU: the monitor on a Cortex-M4F is bit-identical with the host (goldens)"
+step "QEMU: the monitor on a Cortex-M4F is bit-identical with the host (goldens); the firmware's tasks on an emulated board"
 cargo qemu-test
 
 step "QEMU: instructions per Monitor::step, static RAM, stack (budget)"

@@ -1,0 +1,230 @@
+//! Build-time (host) half of the emulated-board tests (`qemu/firmware_*.rs`):
+//! a golden recording turned into the ADC codes the emulated board feeds
+//! the firmware, and the host's answer for those codes.
+//!
+//! For every golden case this writes to `OUT_DIR`:
+//!
+//! - `NAME.codes.bin`: per sample, for each channel in `Channel::ALL`
+//!   order, the sum of the [`SCANS`] ADC codes of that 1 ms block (u16,
+//!   little-endian). The value is the recorded reading through the
+//!   inverse of the firmware's analogue front end (`firmware::board_map::
+//!   FRONTEND`), rounded to a quarter code: the resolution of 4× averaged
+//!   12-bit conversions. The board splits it into 4 codes that differ by
+//!   at most 1. A missing reading becomes 0 (a dead loop).
+//! - `NAME.reference.bin`: per sample, what the host computes from those
+//!   codes by the estimator's sequence (front end → acknowledge if one is
+//!   applied at this sample → `Monitor::step` → `AlarmLogic::update`):
+//!   the status, detail and alarm frames built from it (8 bytes each,
+//!   E2E-protected with counter 0), 24 bytes per sample.
+//!
+//! and a Rust source with one `EmuCase` per golden case (the list of
+//! alarm changes, the monitor's events, the sample at which the test
+//! sends the acknowledge command, and the golden's own expected events,
+//! computed from the unquantised readings).
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use golden::canon::event_code;
+use golden::expected::Expected;
+use golden::input::Input;
+use golden::params::golden_params;
+use monitor::alarm::{AlarmLogic, LeakKind};
+use monitor::deadline::SampleClock;
+use monitor::protocol::{AlarmFrame, DetailFrame, Encoder, Message, StatusFrame};
+use monitor::signal::frontend::{average_scans, Frontend, FrontendConfig, Input as FrontInput};
+use monitor::{Channel, Monitor, Sample};
+
+/// Scans per 1 ms block (`firmware::board_map::SCANS_PER_SAMPLE`; the
+/// target checks they agree).
+pub const SCANS: u16 = 4;
+/// Sample period, µs (`firmware::app::SAMPLE_PERIOD_US`; checked too).
+pub const SAMPLE_PERIOD_US: u32 = 1000;
+/// Bytes per sample in `NAME.reference.bin`.
+pub const REFERENCE_RECORD: usize = 24;
+/// The acknowledge command is applied this long after the last alarm
+/// change of the run without it, ms.
+const ACK_AFTER_MS: u32 = 200;
+/// … if at least this much of the recording is left after it, ms.
+const ACK_MIN_LEFT_MS: u32 = 100;
+
+/// The sum of [`SCANS`] codes of one channel for `value` (engineering
+/// units), or 0 for a missing value or an input that is not fitted.
+fn code_sum(cfg: &FrontendConfig, channel: usize, value: Option<f32>) -> u16 {
+    let adc = cfg.adc;
+    let counts = match (cfg.inputs[channel], value) {
+        (FrontInput::Loop(l), Some(v)) => adc.counts(l.volts_for(l.milliamps_for(v))),
+        (FrontInput::Divider(d), Some(v)) => {
+            adc.counts(d.pin_volts(v / d.units_per_volt, adc.vref_v))
+        }
+        _ => return 0,
+    };
+    let max = adc.full_scale_counts * SCANS as f32;
+    (counts * SCANS as f32).round().clamp(0.0, max) as u16
+}
+
+/// The block of [`SCANS`] interleaved scans whose per-channel sums are
+/// `sums` (the same split as the emulated board's).
+fn block(sums: &[u16; 7]) -> Vec<u16> {
+    let mut raw = Vec::with_capacity(7 * SCANS as usize);
+    for scan in 0..SCANS {
+        for &s in sums {
+            raw.push(s / SCANS + u16::from(scan < s % SCANS));
+        }
+    }
+    raw
+}
+
+fn protect(msg: Message) -> [u8; 8] {
+    let frame = Encoder::new().encode(&msg);
+    frame.data().try_into().expect("8-byte frame")
+}
+
+/// One run of the host's estimator sequence over the codes.
+struct Run {
+    reference: Vec<u8>,
+    /// (sample, alarm frame) at sample 0 and at every change.
+    alarms: Vec<(u32, AlarmFrame)>,
+    /// (sample, event code).
+    events: Vec<(u32, u16)>,
+}
+
+fn run(input: &Input<'_>, codes: &[[u16; 7]], frontend: FrontendConfig, ack: Option<u32>) -> Run {
+    let params = golden_params(input.sample_period_s, input.warm_up_s);
+    let mut monitor = Monitor::<f32>::new(&params).expect("golden parameters");
+    let mut frontend = Frontend::new(frontend);
+    let mut clock = SampleClock::new(SAMPLE_PERIOD_US);
+    let mut alarm = AlarmLogic::new();
+    let mut out = Run {
+        reference: Vec::with_capacity(codes.len() * REFERENCE_RECORD),
+        alarms: Vec::new(),
+        events: Vec::new(),
+    };
+    for (k, sums) in codes.iter().enumerate() {
+        let k = k as u32;
+        let index = clock.next_index();
+        let t_ms = clock.t_ms(index);
+        let acquired = frontend.convert(clock.t_s(index), &average_scans(&block(sums)));
+        if ack == Some(k) {
+            alarm.acknowledge();
+            monitor.clear_alarm();
+        }
+        let status = monitor.step(&acquired.sample);
+        for e in &status.events {
+            out.events.push((k, event_code(e)));
+        }
+        let changed = alarm.update(&status, t_ms as u32);
+        let frame = AlarmFrame::from_logic(&alarm);
+        if changed || k == 0 {
+            out.alarms.push((k, frame));
+        }
+        out.reference
+            .extend(protect(Message::Status(StatusFrame::from_status(&status))));
+        out.reference
+            .extend(protect(Message::Detail(DetailFrame::from_status(&status))));
+        out.reference.extend(protect(Message::Alarm(frame)));
+    }
+    out
+}
+
+fn sample_codes(cfg: &FrontendConfig, s: &Sample) -> [u16; 7] {
+    core::array::from_fn(|i| code_sum(cfg, i, s.get(Channel::ALL[i])))
+}
+
+/// Write the files of the case `name` and return its `EmuCase` source.
+pub fn case(
+    name: &str,
+    input: &[u8],
+    expected: &[u8],
+    frontend: FrontendConfig,
+    out: &Path,
+) -> String {
+    let input = Input::parse(input).unwrap_or_else(|e| panic!("{name}: {e}"));
+    let expected = Expected::parse(expected).unwrap_or_else(|e| panic!("{name}: {e}"));
+    let codes: Vec<[u16; 7]> = input
+        .iter()
+        .map(|s| sample_codes(&frontend, &s.unwrap_or_else(|e| panic!("{name}: {e}"))))
+        .collect();
+    let n = codes.len() as u32;
+
+    // A latched leak is acknowledged a little after the last alarm change.
+    let plain = run(&input, &codes, frontend, None);
+    let last = plain.alarms.last().expect("sample 0");
+    let ack = (last.1.latched != LeakKind::None)
+        .then_some(last.0 + ACK_AFTER_MS)
+        .filter(|&k| k + ACK_MIN_LEFT_MS <= n);
+    let r = if ack.is_some() {
+        run(&input, &codes, frontend, ack)
+    } else {
+        plain
+    };
+
+    let codes_path = out.join(format!("{name}.codes.bin"));
+    let bytes: Vec<u8> = codes
+        .iter()
+        .flatten()
+        .flat_map(|c| c.to_le_bytes())
+        .collect();
+    std::fs::write(&codes_path, bytes).unwrap();
+    let reference_path = out.join(format!("{name}.reference.bin"));
+    std::fs::write(&reference_path, &r.reference).unwrap();
+
+    let mut src = String::new();
+    let upper = name.to_uppercase().replace(['-', '.'], "_");
+    writeln!(src, "/// Golden case `{name}` on the emulated board.").unwrap();
+    writeln!(
+        src,
+        "#[allow(dead_code)] // each test binary replays one case"
+    )
+    .unwrap();
+    writeln!(src, "pub static {upper}: EmuCase = EmuCase {{").unwrap();
+    writeln!(src, "    name: {name:?},").unwrap();
+    writeln!(src, "    source: {:?},", input.source).unwrap();
+    writeln!(src, "    samples: {n},").unwrap();
+    writeln!(
+        src,
+        "    sample_period_s: f64::from_bits({:#x}),",
+        input.sample_period_s.to_bits()
+    )
+    .unwrap();
+    writeln!(
+        src,
+        "    warm_up_s: f64::from_bits({:#x}),",
+        input.warm_up_s.to_bits()
+    )
+    .unwrap();
+    writeln!(src, "    sample_period_us: {SAMPLE_PERIOD_US},").unwrap();
+    writeln!(src, "    scans: {SCANS},").unwrap();
+    writeln!(
+        src,
+        "    codes: include_bytes!({:?}),",
+        codes_path.display().to_string()
+    )
+    .unwrap();
+    writeln!(
+        src,
+        "    reference: include_bytes!({:?}),",
+        reference_path.display().to_string()
+    )
+    .unwrap();
+    writeln!(src, "    ack_sample: {ack:?},").unwrap();
+    let list = |v: &[(u32, u16)]| {
+        v.iter()
+            .map(|(k, c)| format!("({k}, {c:#06x})"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    writeln!(src, "    events: &[{}],", list(&r.events)).unwrap();
+    let golden_events: Vec<(u32, u16)> = expected.events().collect();
+    writeln!(src, "    golden_events: &[{}],", list(&golden_events)).unwrap();
+    writeln!(src, "    golden_verdict: {},", expected.final_verdict).unwrap();
+    let alarms = r
+        .alarms
+        .iter()
+        .map(|(k, a)| format!("({k}, {:?})", protect(Message::Alarm(*a))))
+        .collect::<Vec<_>>()
+        .join(", ");
+    writeln!(src, "    alarm_changes: &[{alarms}],").unwrap();
+    writeln!(src, "}};").unwrap();
+    src
+}

@@ -1,0 +1,222 @@
+//! The emulated board: `firmware::board`'s traits on QEMU. The ADC
+//! replays a golden recording from flash at 1 kHz; the relay, the CAN
+//! controller, the watchdog and the LED record what the firmware does
+//! with them (`super::record`); the CAN receiver plays a script of
+//! command frames.
+
+use core::future::pending;
+use core::sync::atomic::{AtomicBool, Ordering};
+
+use embassy_time::{Duration, Instant, Timer};
+use firmware::board::{
+    CanReceive, CanRxError, CanTransmit, CanTxError, CycleCounter, Overrun, RelayOutput,
+    SampleSource, StatusLed, Watchdog,
+};
+use firmware::board_map::{BLOCK_LEN, SCANS_PER_SAMPLE};
+use monitor::protocol::CanFrame;
+use monitor::signal::frontend::CHANNELS;
+use qemu_tests::counter;
+
+use super::case::EmuCase;
+use super::record::{self, RelayChange, Sent};
+
+/// One ADC block per sample period.
+const BLOCK_PERIOD: Duration = Duration::from_micros(firmware::app::SAMPLE_PERIOD_US as u64);
+/// Blocks the (emulated) DMA ring buffer holds, as on the STM32 board: a
+/// reader that falls this many blocks behind has lost data.
+const RING_BLOCKS: u64 = 2;
+
+/// The ADC, DMA and trigger timer: block `k` of the recording is complete
+/// at `t0 + k` ms, as TIM3-triggered scans fill a half of the DMA buffer
+/// every millisecond. Each channel's code sum is split over the scans
+/// (codes differing by at most 1), so the estimator's average is the
+/// recorded quarter-code value. After the last block nothing more
+/// arrives: to the firmware, the ADC stopped.
+pub struct ReplayAdc {
+    case: &'static EmuCase,
+    t0: Instant,
+    next: u32,
+    block: [u16; BLOCK_LEN],
+}
+
+impl ReplayAdc {
+    /// Start the conversions now: block 0 is complete at the next
+    /// millisecond boundary after one block period.
+    pub fn start(case: &'static EmuCase) -> Self {
+        let t0 = Instant::from_millis(Instant::now().as_millis() + 1);
+        record::with(|l| l.t0 = Some(t0));
+        Self {
+            case,
+            t0,
+            next: 0,
+            block: [0; BLOCK_LEN],
+        }
+    }
+
+    fn fill(&mut self, k: u32) {
+        let sums = self.case.codes(k);
+        let scans = SCANS_PER_SAMPLE as u16;
+        for (scan, codes) in self.block.chunks_exact_mut(CHANNELS).enumerate() {
+            for (code, &sum) in codes.iter_mut().zip(&sums) {
+                *code = sum / scans + u16::from((scan as u16) < sum % scans);
+            }
+        }
+    }
+}
+
+impl SampleSource for ReplayAdc {
+    async fn next_block(&mut self) -> Result<&[u16], Overrun> {
+        if self.next >= self.case.samples {
+            pending::<()>().await;
+        }
+        let due = self.t0 + BLOCK_PERIOD * self.next;
+        Timer::at(due).await;
+        let complete = (Instant::now() - self.t0).as_ticks() / BLOCK_PERIOD.as_ticks();
+        if complete >= self.next as u64 + RING_BLOCKS {
+            // Overwritten before it was read (a whole ring behind):
+            // report it, then continue with the latest complete block.
+            self.next = (complete as u32).min(self.case.samples);
+            record::with(|l| l.overruns += 1);
+            return Err(Overrun);
+        }
+        self.fill(self.next);
+        self.next += 1;
+        record::with(|l| l.blocks += 1);
+        Ok(&self.block)
+    }
+}
+
+/// The fail-safe relay: records its first write and every change.
+pub struct RecordingRelay {
+    energised: AtomicBool,
+}
+
+impl RecordingRelay {
+    /// De-energised (the driver input's pull-down), not yet written.
+    pub const fn new() -> Self {
+        Self {
+            energised: AtomicBool::new(false),
+        }
+    }
+}
+
+impl RelayOutput for RecordingRelay {
+    fn set_energised(&self, energised: bool) {
+        let at = Instant::now();
+        record::with(|l| {
+            let first = l.relay_writes == 0;
+            l.relay_writes += 1;
+            let previous = self.energised.swap(energised, Ordering::Relaxed);
+            if (first || previous != energised)
+                && l.relay.push(RelayChange { at, energised }).is_err()
+            {
+                l.overflow = true;
+            }
+        });
+    }
+}
+
+/// The CAN controller's transmit side: every frame is accepted at once
+/// (a bus with a receiver acknowledging everything) and recorded.
+pub struct RecordingCanTx;
+
+impl CanTransmit for RecordingCanTx {
+    async fn transmit(&mut self, frame: &CanFrame) -> Result<(), CanTxError> {
+        let sent = Sent {
+            at: Instant::now(),
+            frame: *frame,
+        };
+        record::with(|l| {
+            if l.frames.push(sent).is_err() {
+                l.overflow = true;
+            }
+        });
+        Ok(())
+    }
+
+    fn abort_pending(&mut self) -> u8 {
+        0
+    }
+}
+
+/// The CAN controller's receive side: delivers each scripted frame at
+/// its time, then nothing.
+pub struct ScriptedCanRx {
+    script: &'static [(Instant, CanFrame)],
+    next: usize,
+}
+
+impl ScriptedCanRx {
+    /// Deliver `script` (in time order).
+    pub fn new(script: &'static [(Instant, CanFrame)]) -> Self {
+        Self { script, next: 0 }
+    }
+}
+
+impl CanReceive for ScriptedCanRx {
+    async fn receive(&mut self) -> Result<CanFrame, CanRxError> {
+        let Some(&(at, frame)) = self.script.get(self.next) else {
+            return pending().await;
+        };
+        Timer::at(at).await;
+        self.next += 1;
+        Ok(frame)
+    }
+}
+
+/// The independent watchdog: counts feeds and the longest gap between
+/// them.
+pub struct RecordingWatchdog;
+
+impl Watchdog for RecordingWatchdog {
+    fn feed(&mut self) {
+        let now = Instant::now();
+        record::with(|l| {
+            l.feeds += 1;
+            let first = match l.feed_span {
+                Some((first, last)) => {
+                    l.max_feed_gap = l.max_feed_gap.max(now - last);
+                    first
+                }
+                None => now,
+            };
+            l.feed_span = Some((first, now));
+        });
+    }
+}
+
+/// QEMU's TIM2 as the cycle counter: under `-icount shift=0` it counts
+/// one tick per instruction, 1 ns of virtual time each
+/// (`qemu_tests::counter`). The emulated CPU thus runs 1 000 000
+/// instructions per 1 ms sample, about 12 times what a 168 MHz
+/// Cortex-M4 executes: the estimator's load figures here are not the
+/// chip's (`cargo qemu-bench` measures the step's cost).
+pub struct InstructionCounter;
+
+impl CycleCounter for InstructionCounter {
+    const CYCLES_PER_SAMPLE: u32 = firmware::app::SAMPLE_PERIOD_US * 1000;
+
+    fn cycles(&self) -> u32 {
+        counter::now()
+    }
+}
+
+/// The status LED: counts changes.
+pub struct RecordingLed {
+    on: bool,
+}
+
+impl RecordingLed {
+    /// Off.
+    pub const fn new() -> Self {
+        Self { on: false }
+    }
+}
+
+impl StatusLed for RecordingLed {
+    fn set(&mut self, on: bool) {
+        if on != core::mem::replace(&mut self.on, on) {
+            record::with(|l| l.led_changes += 1);
+        }
+    }
+}

@@ -1,0 +1,140 @@
+//! The checks must be able to fail: run them again on copies of the
+//! recorded log with one realistic fault each, and require the fault to
+//! be flagged by the check meant to catch it.
+
+use embassy_time::Duration;
+use firmware::app::shared::Shared;
+use monitor::alarm::{AlarmState, LeakKind};
+use monitor::protocol::{e2e, CanFrame, Decoder, Encoder, Message, MessageKind};
+use qemu_tests::println;
+
+use super::{Check, Expect};
+use crate::emu::case::EmuCase;
+use crate::emu::record::Log;
+
+/// Index in `log.frames` of the `nth` frame of `kind`.
+fn nth(log: &Log, kind: MessageKind, nth: usize) -> usize {
+    log.frames
+        .iter()
+        .enumerate()
+        .filter(|(_, s)| s.frame.id() == kind.id())
+        .nth(nth)
+        .map(|(i, _)| i)
+        .expect("enough frames of the kind")
+}
+
+/// `frame` with its message replaced by `msg`, keeping its counter and
+/// protecting it properly (a wrong message, not a corrupted frame).
+fn resend(frame: &CanFrame, msg: &Message) -> CanFrame {
+    let counter = frame.data()[1] & 0x0F;
+    let mut data = [0u8; 8];
+    data.copy_from_slice(Encoder::new().encode(msg).data());
+    e2e::protect(frame.id(), &mut data, counter);
+    CanFrame::new(frame.id(), &data).expect("8 bytes")
+}
+
+/// The first alarm frame latching a leak (or, without one, the last
+/// alarm frame before the end), with a wrong announcement: another leak
+/// kind, or a leak where there is none.
+fn wrong_verdict(log: &mut Log, case: &EmuCase) {
+    let alarm = |s: &crate::emu::record::Sent| match Decoder::new().decode(&s.frame) {
+        Ok(r) => match r.message {
+            Message::Alarm(a) => Some(a),
+            _ => None,
+        },
+        Err(_) => None,
+    };
+    let leak = log
+        .frames
+        .iter()
+        .position(|s| alarm(s).is_some_and(|a| a.latched != LeakKind::None));
+    let i = leak.unwrap_or_else(|| nth(log, MessageKind::Alarm, case.samples as usize / 1000));
+    let mut a = alarm(&log.frames[i]).expect("an alarm frame");
+    a.latched = match a.latched {
+        LeakKind::Internal => LeakKind::External,
+        LeakKind::None => LeakKind::Internal,
+        _ => LeakKind::Internal,
+    };
+    a.state = AlarmState::Leak;
+    a.relay_energised = false;
+    log.frames[i].frame = resend(&log.frames[i].frame, &Message::Alarm(a));
+}
+
+/// Run the checks on `log` damaged by `damage`; it must fail `want`.
+fn expect_flagged(
+    name: &str,
+    case: &EmuCase,
+    log: &mut Log,
+    shared: &Shared,
+    expect: &Expect,
+    damage: impl FnOnce(&mut Log),
+    want: &[Check],
+) -> bool {
+    let saved = log.frames.clone();
+    damage(log);
+    let f = super::run(case, log, shared, expect, true);
+    log.frames = saved;
+    let ok = !f.passed() && want.iter().all(|&c| f.flagged(c));
+    println!(
+        "self-test: {name}: {} (flagged {:?}, want {:?})",
+        if ok { "caught" } else { "FAILED: not caught" },
+        f.flagged_list(),
+        want
+    );
+    ok
+}
+
+/// Every fault must be caught; the log is restored after each.
+pub fn run(case: &EmuCase, log: &mut Log, shared: &Shared, expect: &Expect) -> bool {
+    let mut ok = true;
+    ok &= expect_flagged(
+        "one bit flipped in the 10th status frame",
+        case,
+        log,
+        shared,
+        expect,
+        |log| {
+            let i = nth(log, MessageKind::Status, 10);
+            let f = log.frames[i].frame;
+            let mut data = [0u8; 8];
+            data.copy_from_slice(f.data());
+            data[3] ^= 0x04;
+            log.frames[i].frame = CanFrame::new(f.id(), &data).expect("8 bytes");
+        },
+        &[Check::Decode],
+    );
+    ok &= expect_flagged(
+        "the 20th status frame lost",
+        case,
+        log,
+        shared,
+        expect,
+        |log| {
+            let i = nth(log, MessageKind::Status, 20);
+            log.frames.remove(i);
+        },
+        &[Check::Counter, Check::Schedule],
+    );
+    ok &= expect_flagged(
+        "a heartbeat sent 1 ms late",
+        case,
+        log,
+        shared,
+        expect,
+        |log| {
+            let i = nth(log, MessageKind::Heartbeat, 2);
+            log.frames[i].at += Duration::from_millis(1);
+        },
+        &[Check::Schedule],
+    );
+    ok &= expect_flagged(
+        "an alarm frame announcing the wrong leak",
+        case,
+        log,
+        shared,
+        expect,
+        |log| wrong_verdict(log, case),
+        &[Check::Content, Check::Verdict],
+    );
+    ok
+}

@@ -1,0 +1,241 @@
+//! The firmware's application tasks (`firmware::app`) on an emulated
+//! board in QEMU: the same estimator, CAN and supervisor code as on the
+//! STM32F405, only the board trait (`board`) and the time driver
+//! (`time_driver`) are emulated.
+//!
+//! As on the STM32 board, the estimator runs in an interrupt executor
+//! above everything else the application does. The other tasks run in a
+//! second interrupt executor at the lowest priority instead of the
+//! thread-mode executor: QEMU implements `wfe`, on which embassy's
+//! thread-mode executor idles, as a busy loop, while `wfi` lets its
+//! virtual clock jump to the next timer (`-icount …,sleep=off`).
+//!
+//! A run: the board replays a golden case at 1 kHz; the CAN receiver
+//! plays the command script ([`commands`]); after the last sample the
+//! checker waits for the supervisor to notice that samples stopped,
+//! then checks everything recorded (`check`) and exits QEMU with the
+//! verdict.
+
+mod board;
+pub mod case;
+mod check;
+mod logger;
+mod record;
+mod time_driver;
+
+use cortex_m::interrupt::InterruptNumber;
+use cortex_m_rt::exception;
+use embassy_executor::InterruptExecutor;
+use embassy_time::{Duration, Instant, Timer};
+use firmware::app;
+use firmware::app::shared::Shared;
+use firmware::board::BootInfo;
+use firmware::board_map::{FRONTEND, SCANS_PER_SAMPLE};
+use golden::params::golden_params;
+use heapless::Vec;
+use monitor::protocol::{CanFrame, Command, CommandFrame, Encoder, Message, ResetCause};
+use monitor::Monitor;
+use qemu_tests::counter::{self, Counter};
+use qemu_tests::{exit, println};
+
+use board::{
+    InstructionCounter, RecordingCanTx, RecordingLed, RecordingRelay, RecordingWatchdog, ReplayAdc,
+    ScriptedCanRx,
+};
+use case::EmuCase;
+use check::Expect;
+
+static SHARED: Shared = Shared::new();
+static RELAY: RecordingRelay = RecordingRelay::new();
+static EXECUTOR_HIGH: InterruptExecutor = InterruptExecutor::new();
+static EXECUTOR_LOW: InterruptExecutor = InterruptExecutor::new();
+
+/// The reset cause the emulated board reports.
+const RESET_CAUSE: ResetCause = ResetCause::PowerOn;
+/// Priorities (upper 4 bits, as on the STM32F405): the time driver's
+/// tick above the estimator (as the STM32 board's DMA and timer
+/// interrupts), the estimator at the STM32 board's priority 6, the
+/// other tasks at the lowest.
+const TICK_PRIORITY: u8 = 0 << 4;
+const ESTIMATOR_PRIORITY: u8 = 6 << 4;
+const TASKS_PRIORITY: u8 = 15 << 4;
+/// How long after the last sample the checker waits: the supervisor
+/// declares the estimator stalled within two of its check periods.
+const SETTLE: Duration = Duration::from_millis(50);
+
+/// Spare interrupt vectors of the STM32F405 running the executors (UART4
+/// as on the STM32 board, UART5).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u16)]
+enum Irq {
+    Estimator = 52,
+    Tasks = 53,
+}
+
+// SAFETY: both are valid interrupt numbers of the STM32F405 (82 vectors).
+unsafe impl InterruptNumber for Irq {
+    fn number(self) -> u16 {
+        self as u16
+    }
+}
+
+/// Without a device crate every interrupt arrives here.
+#[exception]
+unsafe fn DefaultHandler(irqn: i16) {
+    // SAFETY: each executor's own interrupt, started before it is unmasked.
+    unsafe {
+        match irqn {
+            n if n == Irq::Estimator as i16 => EXECUTOR_HIGH.on_interrupt(),
+            n if n == Irq::Tasks as i16 => EXECUTOR_LOW.on_interrupt(),
+            n => panic!("unexpected interrupt {n}"),
+        }
+    }
+}
+
+#[embassy_executor::task]
+async fn estimator(source: ReplayAdc, monitor: &'static mut Monitor<f32>, boot: BootInfo) {
+    app::estimator::run(
+        source,
+        &RELAY,
+        InstructionCounter,
+        monitor,
+        FRONTEND,
+        boot,
+        &SHARED,
+    )
+    .await
+}
+
+#[embassy_executor::task]
+async fn supervisor() {
+    app::supervisor::run(RecordingWatchdog, &RELAY, RecordingLed::new(), &SHARED).await
+}
+
+#[embassy_executor::task]
+async fn can_tx() {
+    app::can_tx::run(RecordingCanTx, &SHARED).await
+}
+
+#[embassy_executor::task]
+async fn can_rx(rx: ScriptedCanRx) {
+    app::can_rx::run(rx, &SHARED).await
+}
+
+/// Wait for the end of the replay, check, and end the run.
+#[embassy_executor::task]
+async fn checker(case: &'static EmuCase, t0: Instant, expect: Expect) {
+    let period = Duration::from_micros(u64::from(case.sample_period_us));
+    Timer::at(t0 + period * (case.samples - 1) + SETTLE).await;
+    println!(
+        "emulated board: {} samples of {} replayed; the firmware logged {} defmt records",
+        case.samples,
+        case.source,
+        logger::records()
+    );
+    let (passed, caught) = record::with(|log| {
+        let passed = check::run(case, log, &SHARED, &expect, false).passed();
+        (passed, check::selftest::run(case, log, &SHARED, &expect))
+    });
+    if passed && caught {
+        println!(
+            "firmware on the emulated board, case {}: all checks passed",
+            case.name
+        );
+    }
+    exit(passed && caught)
+}
+
+/// The command frames the CAN receiver plays, around the sample `ack`
+/// at which the estimator must apply the acknowledge: a corrupted copy
+/// 100 samples before, the acknowledge itself half a sample before (the
+/// receiver task signals it while the estimator waits for the next
+/// block), and a replay of it 50 samples after. Only the second may act.
+fn commands(case: &EmuCase, t0: Instant) -> (Vec<(Instant, CanFrame), 3>, u32) {
+    let mut script = Vec::new();
+    let Some(ack) = case.ack_sample else {
+        return (script, 0);
+    };
+    let period = Duration::from_micros(u64::from(case.sample_period_us));
+    let at = |k: u32| t0 + period * k + period / 2;
+    let frame = Encoder::new().encode(&Message::Command(CommandFrame {
+        command: Command::AcknowledgeAlarm,
+    }));
+    let mut data = [0u8; 8];
+    data.copy_from_slice(frame.data());
+    data[2] ^= 0x01;
+    let corrupted = CanFrame::new(frame.id(), &data).expect("8 bytes");
+    let _ = script.push((at(ack - 100), corrupted));
+    let _ = script.push((at(ack - 1), frame));
+    let _ = script.push((at(ack + 50), frame));
+    (script, 2)
+}
+
+/// Check the emulated time base against QEMU's virtual clock (TIM2,
+/// 1 ns per tick): 5 ms of embassy time must be 5 ms of virtual time.
+fn check_time_base() -> bool {
+    const SPAN_US: u64 = 5000;
+    let start = Instant::now();
+    let c0 = counter::now();
+    while Instant::now() < start + Duration::from_micros(SPAN_US) {}
+    let ns = counter::now().wrapping_sub(c0) as u64;
+    let ok = ns.abs_diff(SPAN_US * 1000) <= SPAN_US * 10;
+    println!(
+        "time base: {SPAN_US} µs of embassy time = {ns} ns of QEMU virtual time{}",
+        if ok {
+            ""
+        } else {
+            " (FAILED: off by more than 1 %)"
+        }
+    );
+    ok
+}
+
+/// Replay `case` through the firmware's tasks and check what they do.
+pub fn run(case: &'static EmuCase) -> ! {
+    assert!(
+        case.sample_period_us == app::SAMPLE_PERIOD_US && case.scans as usize == SCANS_PER_SAMPLE,
+        "{}: codes generated for another sample period or scan count",
+        case.name
+    );
+    let mut core = cortex_m::Peripherals::take().expect("core peripherals");
+    // TIM2 counts virtual nanoseconds (the estimator's cycle counter).
+    let _ = Counter::start();
+    time_driver::start(core.SYST, &mut core.SCB, TICK_PRIORITY);
+    if !check_time_base() {
+        exit(false);
+    }
+
+    let boot = BootInfo {
+        reset_cause: RESET_CAUSE,
+    };
+    let params = golden_params(case.sample_period_s, case.warm_up_s);
+    let monitor = match Monitor::new(&params) {
+        Ok(m) => cortex_m::singleton!(: Monitor<f32> = m).expect("one monitor"),
+        Err(e) => panic!("invalid golden parameters: {}", e.field),
+    };
+    let source = ReplayAdc::start(case);
+    let t0 = record::with(|l| l.t0).expect("t0 set by the ADC");
+    let (script, rejected_commands) = commands(case, t0);
+    let script: &'static Vec<(Instant, CanFrame), 3> =
+        cortex_m::singleton!(: Vec<(Instant, CanFrame), 3> = script).expect("one script");
+    let expect = Expect {
+        reset_cause: RESET_CAUSE,
+        rejected_commands,
+    };
+
+    // SAFETY: set before the executors start, as they require.
+    unsafe {
+        core.NVIC.set_priority(Irq::Estimator, ESTIMATOR_PRIORITY);
+        core.NVIC.set_priority(Irq::Tasks, TASKS_PRIORITY);
+    }
+    let high = EXECUTOR_HIGH.start(Irq::Estimator);
+    high.spawn(estimator(source, monitor, boot).expect("estimator task"));
+    let low = EXECUTOR_LOW.start(Irq::Tasks);
+    low.spawn(supervisor().expect("supervisor task"));
+    low.spawn(can_tx().expect("CAN transmit task"));
+    low.spawn(can_rx(ScriptedCanRx::new(script.as_slice())).expect("CAN receive task"));
+    low.spawn(checker(case, t0, expect).expect("checker task"));
+    loop {
+        cortex_m::asm::wfi();
+    }
+}
