@@ -195,12 +195,13 @@ impl AlarmLogic {
         self.out
     }
 
-    /// Time of the last change, ms since boot.
+    /// Time of the last change, ms on the sample clock.
     pub const fn changed_at_ms(&self) -> u32 {
         self.changed_at_ms
     }
 
-    /// Take the monitor's status of the sample at `t_ms` (ms since boot).
+    /// Take the monitor's status of the sample at `t_ms` (ms on the sample
+    /// clock).
     /// Returns true when the output changed (send the alarm frame now).
     pub fn update(&mut self, status: &Status, t_ms: u32) -> bool {
         let latched = self.out.latched.union(LeakKind::of_verdict(status.verdict));

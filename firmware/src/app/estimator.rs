@@ -48,7 +48,12 @@ pub async fn run<S: SampleSource, R: RelayOutput, C: CycleCounter>(
         };
         let start = cycles.cycles();
         let now = Instant::now();
-        let t0 = *first_block.get_or_insert(now);
+        let t0 = *first_block.get_or_insert_with(|| {
+            shared
+                .first_sample_ms
+                .store(now.as_millis() as u32, Ordering::Release);
+            now
+        });
         let lost = core::mem::take(&mut overran).then(|| {
             let lost = clock.resync(now.duration_since(t0).as_micros());
             deadline.overrun(lost);

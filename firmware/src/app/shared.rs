@@ -76,6 +76,9 @@ pub struct Shared {
     pub alarm_state: AtomicU8,
     /// Set by the supervisor when the estimator stalled: relay off for good.
     pub stalled: AtomicBool,
+    /// Boot time of the first sample, ms (`u32::MAX` until it arrives): the
+    /// origin of the sample clock, which dates every alarm frame.
+    pub first_sample_ms: AtomicU32,
     last_alarm: Mutex<CriticalSectionRawMutex, Cell<Option<AlarmFrame>>>,
     last_load: Mutex<CriticalSectionRawMutex, Cell<LoadReport>>,
     /// CAN counters.
@@ -89,6 +92,15 @@ impl Default for Shared {
 }
 
 impl Shared {
+    /// `now_ms` (ms since boot) on the sample clock: ms since the first
+    /// sample (0 before it), so frames from any task share one time base.
+    pub fn sample_clock_ms(&self, now_ms: u64) -> u32 {
+        match self.first_sample_ms.load(Ordering::Acquire) {
+            u32::MAX => 0,
+            first => (now_ms as u32).wrapping_sub(first),
+        }
+    }
+
     /// Nothing posted, nothing counted.
     pub const fn new() -> Self {
         Self {
@@ -101,6 +113,7 @@ impl Shared {
             missed: AtomicU32::new(0),
             alarm_state: AtomicU8::new(0),
             stalled: AtomicBool::new(false),
+            first_sample_ms: AtomicU32::new(u32::MAX),
             last_alarm: Mutex::new(Cell::new(None)),
             last_load: Mutex::new(Cell::new(LoadReport {
                 processed: 0,

@@ -76,7 +76,7 @@ pub async fn run<W: Watchdog, R: RelayOutput, L: StatusLed>(
                         shared.post(Message::Alarm(AlarmFrame {
                             state: AlarmState::EstimatorStalled,
                             relay_energised: false,
-                            changed_at_ms: now_ms as u32,
+                            changed_at_ms: shared.sample_clock_ms(now_ms),
                             ..last
                         }));
                     }

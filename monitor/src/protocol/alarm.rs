@@ -9,7 +9,7 @@
 //! | 2 | 0–1 | LatchedLeak | 0 none, 1 internal, 2 external, 3 both |
 //! | 2 | 2 | RelayEnergised | 1 = energised (healthy) |
 //! | 3 | 0–7 | FaultedChannels | bit per `Channel` (0 p_supply … 6 temp_oil) |
-//! | 4–7 | | ChangedAt | u32, ms since boot of the last change (wraps after 49.7 days) |
+//! | 4–7 | | ChangedAt | u32, ms on the sample clock (since the first sample) of the last change (wraps after 49.7 days) |
 
 use super::bytes::{get_u32, put_u32};
 use super::signal::SignalList;
@@ -28,7 +28,9 @@ pub struct AlarmFrame {
     pub relay_energised: bool,
     /// Faulted input channels, `Channel::bit` mask.
     pub faulted_channels: u8,
-    /// Time of the last change of the alarm output, ms since boot.
+    /// Time of the last change of the alarm output, ms on the monitor's
+    /// sample clock (since the first sample; it counts samples, lost ones
+    /// included, so it runs on across ADC overruns).
     pub changed_at_ms: u32,
 }
 

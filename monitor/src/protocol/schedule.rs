@@ -46,7 +46,7 @@ impl FrameScheduler {
         Self { last_ms: None }
     }
 
-    /// Frames due at the sample at `t_ms` (ms since boot, increasing;
+    /// Frames due at the sample at `t_ms` (ms on the sample clock, increasing;
     /// samples may be skipped). The first sample sends every frame.
     pub fn due(&mut self, t_ms: u64, alarm_changed: bool) -> Due {
         let due = match self.last_ms {

@@ -204,11 +204,15 @@ fn stall(case: &EmuCase, log: &Log, frames: &mut Frames, f: &mut Findings) {
                     && a.faulted_channels == last_host.faulted_channels
                     && d.at >= t_end + CHECK_PERIOD * 2
                     && d.at <= t_end + CHECK_PERIOD * 3 + Duration::from_millis(1)
-                    && u64::from(a.changed_at_ms).abs_diff(d.at.as_millis()) <= 1 =>
+                    // Alarm frames are dated on the sample clock: ms since
+                    // the first sample (the board's t0).
+                    && log.t0.is_some_and(|t0| {
+                        u64::from(a.changed_at_ms).abs_diff((d.at - t0).as_millis()) <= 1
+                    }) =>
             {
                 frames.stall = Some((d.at, a));
                 f.note(format_args!(
-                    "stall: {} µs after the last sample, the supervisor announced {} (relay off, latched {}, changed at {} ms since boot)",
+                    "stall: {} µs after the last sample, the supervisor announced {} (relay off, latched {}, changed at {} ms on the sample clock)",
                     (d.at - t_end).as_micros(),
                     a.state.name(),
                     a.latched.name(),
