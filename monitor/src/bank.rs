@@ -193,7 +193,7 @@ impl<T: Real, const N: usize> HypothesisFilter<T, N> {
         for i in NB..N {
             q[i] = noise.leak * ctx.step.dt;
         }
-        self.ekf.predict_covariance(&phi, &q)?;
+        self.ekf.predict_covariance(&phi, &q);
 
         let mut weights = SVector::<T, N>::repeat(T::ONE);
         weights[GAIN_EXT] = ctx.gain_learning;
@@ -245,6 +245,8 @@ impl<T: Real, const N: usize> HypothesisFilter<T, N> {
         out.flow_external_lpm = out.leak_external * dp_ext;
         out.flow_internal_sd_lpm = out.leak_internal_sd * dp_int;
         out.flow_external_sd_lpm = out.leak_external_sd * dp_ext;
+        // Once per step, after everything that could go wrong.
+        self.ekf.check_finite()?;
         Ok(out)
     }
 
@@ -368,5 +370,130 @@ impl<T: Real> Bank<T> {
             };
         }
         s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::{Inputs, Step, BAR};
+    use crate::params::Params;
+
+    /// A plant, a step context and the filter settings at an operating
+    /// point of the reference rig: moving with the valve open, or holding
+    /// with the spool in the dead zone.
+    struct Setting<T: Real> {
+        plant: Plant<T>,
+        ctx: StepContext<T>,
+        noise: ProcessNoise<T>,
+        r: [T; NZ],
+        s0: [T; NX],
+    }
+
+    fn setting<T: Real>(moving: bool) -> Setting<T> {
+        let params = Params::nominal();
+        let plant = Plant::<T>::new(&params);
+        let f = &params.filter;
+        let u = if moving { 0.2 } else { 0.0 };
+        let ctx = StepContext {
+            inputs: Inputs {
+                p_supply_pa: T::c(50.0 * BAR),
+                p_tank_pa: T::c(0.8 * BAR),
+                u_valve: T::c(u),
+                laminar_factor: T::ONE,
+            },
+            step: Step {
+                dt: T::c(0.001),
+                substeps: 2,
+                spool: plant.spool_step(0.0005),
+            },
+            spool_dt: plant.spool_step(0.001),
+            pressure_lag_s: T::c(params.sensors.pressure_lag_s),
+            learning: T::c(0.7),
+            gain_learning: T::c(0.4),
+        };
+        let gain = f.q_gain / 0.01;
+        let noise = ProcessNoise {
+            base: [
+                T::c(f.q_position),
+                T::c(f.q_velocity),
+                T::c(f.q_spool),
+                T::c(f.q_spool_rate),
+                T::c(f.q_pressure),
+                T::c(f.q_pressure),
+                T::c(gain),
+                T::c(gain),
+                T::c(f.q_laminar / 0.25),
+            ],
+            leak: T::c(f.q_leak),
+        };
+        let sx = params.sensors.position_noise_m / 0.1;
+        let sp = params.sensors.pressure_noise_bar * BAR / 1e7;
+        let v = if moving { 0.2 } else { 0.0 };
+        Setting {
+            plant,
+            ctx,
+            noise,
+            r: [T::c(sx * sx), T::c(sp * sp), T::c(sp * sp)],
+            s0: [T::c(0.5), T::c(v), T::c(u), T::ZERO, T::c(0.3), T::c(0.12)],
+        }
+    }
+
+    /// One step with readings slightly off the filter's own prediction.
+    fn step<T: Real, const N: usize>(
+        f: &mut HypothesisFilter<T, N>,
+        s: &Setting<T>,
+    ) -> Result<FilterOutput<T>, EkfError> {
+        let x = &f.ekf.x;
+        let m = Measurement {
+            z: [x[XP] + T::c(1e-4), x[P3] + T::c(1e-3), x[P4] - T::c(1e-3)],
+            r: s.r,
+        };
+        f.step(&s.plant, &s.ctx, &s.noise, &m)
+    }
+
+    /// A filter of hypothesis `h` run for 200 steps: the covariance is
+    /// populated (but for the gain of the spool direction never used).
+    fn settled<T: Real, const N: usize>(h: Hypothesis, s: &Setting<T>) -> HypothesisFilter<T, N> {
+        let p0 = [T::c(1e-3); NB];
+        let mut f = HypothesisFilter::new(h, &s.s0, &p0, T::c(0.1));
+        for _ in 0..200 {
+            step(&mut f, s).expect("a healthy filter step");
+        }
+        f
+    }
+
+    /// A NaN or infinity anywhere in P or x fails the very next step with
+    /// `NonFinite`, although only x and the diagonal are checked.
+    fn non_finite_anywhere_fails_the_next_step<T: Real, const N: usize>(h: Hypothesis) {
+        for moving in [true, false] {
+            let s = setting::<T>(moving);
+            let good = settled::<T, N>(h, &s);
+            for bad in [T::c(f64::NAN), T::c(f64::INFINITY), T::c(f64::NEG_INFINITY)] {
+                for a in 0..N {
+                    for b in a..N {
+                        let mut f = good.clone();
+                        f.ekf.p[(a, b)] = bad;
+                        f.ekf.p[(b, a)] = bad;
+                        let got = step(&mut f, &s).map(|_| ());
+                        let at = (h, moving, bad, a, b);
+                        assert_eq!(got, Err(EkfError::NonFinite), "P at {at:?}");
+                    }
+                    let mut f = good.clone();
+                    f.ekf.x[a] = bad;
+                    let got = step(&mut f, &s).map(|_| ());
+                    assert_eq!(got, Err(EkfError::NonFinite), "x at {:?}", (h, a));
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn non_finite_values_anywhere_are_caught_within_one_step() {
+        non_finite_anywhere_fails_the_next_step::<f32, { NB }>(Hypothesis::Healthy);
+        non_finite_anywhere_fails_the_next_step::<f32, { NB + 1 }>(Hypothesis::Internal);
+        non_finite_anywhere_fails_the_next_step::<f32, { NB + 1 }>(Hypothesis::External);
+        non_finite_anywhere_fails_the_next_step::<f32, { NB + 2 }>(Hypothesis::Both);
+        non_finite_anywhere_fails_the_next_step::<f64, { NB + 2 }>(Hypothesis::Both);
     }
 }

@@ -7,7 +7,8 @@
 //! covariance a scalar whose failure is easy to detect. The covariance is
 //! updated in Joseph form, P ← (I − k·hᵀ)·P·(I − k·hᵀ)ᵀ + k·r·kᵀ, which stays
 //! symmetric positive semi-definite under rounding, and is re-symmetrised
-//! after every prediction.
+//! after every prediction. Finiteness is checked once per filter step, on
+//! the state and the diagonal of P ([`Ekf::check_finite`]).
 
 use crate::real::Real;
 use nalgebra::{SMatrix, SVector};
@@ -55,19 +56,15 @@ impl<T: Real, const N: usize> Ekf<T, N> {
     }
 
     /// Covariance prediction P ← Φ·P·Φᵀ + diag(q). The mean is predicted by
-    /// the caller (it integrates the nonlinear model).
-    pub fn predict_covariance(
-        &mut self,
-        phi: &SMatrix<T, N, N>,
-        q_diag: &SVector<T, N>,
-    ) -> Result<(), EkfError> {
+    /// the caller (it integrates the nonlinear model). Finiteness is
+    /// checked once per filter step ([`Self::check_finite`]).
+    pub fn predict_covariance(&mut self, phi: &SMatrix<T, N, N>, q_diag: &SVector<T, N>) {
         let mut p = phi * self.p * phi.transpose();
         for i in 0..N {
             p[(i, i)] += q_diag[i];
         }
         symmetrise(&mut p);
         self.p = p;
-        self.check()
     }
 
     /// Update with a direct reading `z` of state `j` with noise variance
@@ -87,6 +84,11 @@ impl<T: Real, const N: usize> Ekf<T, N> {
     /// parameters do not learn from samples the model is known to describe
     /// poorly). The Joseph form gives the exact covariance of the estimator
     /// for any gain, so P stays consistent with what the filter does.
+    ///
+    /// Fails only on the innovation variance; a non-finite state or
+    /// covariance is left for [`Self::check_finite`] at the end of the
+    /// filter step (a non-finite P_jj is reported as
+    /// [`EkfError::NonFinite`] here already, being the cause).
     pub fn update_state_weighted(
         &mut self,
         j: usize,
@@ -97,7 +99,11 @@ impl<T: Real, const N: usize> Ekf<T, N> {
     ) -> Result<ScalarUpdate<T>, EkfError> {
         let s = self.p[(j, j)] + r;
         if !(s.is_finite() && s > T::ZERO) {
-            return Err(EkfError::InnovationCovariance { index });
+            return Err(if self.p[(j, j)].is_finite() {
+                EkfError::InnovationCovariance { index }
+            } else {
+                EkfError::NonFinite
+            });
         }
         let nu = z - self.x[j];
         let inv_s = T::ONE / s;
@@ -116,16 +122,29 @@ impl<T: Real, const N: usize> Ekf<T, N> {
                 self.p[(b, a)] = v;
             }
         }
-        self.check()?;
         Ok(ScalarUpdate {
             innovation: nu,
             variance: s,
         })
     }
 
-    /// Every entry finite.
-    fn check(&self) -> Result<(), EkfError> {
-        if self.x.iter().all(|v| v.is_finite()) && self.p.iter().all(|v| v.is_finite()) {
+    /// The state and the covariance are finite.
+    ///
+    /// Only x and the diagonal of P are scanned, once per filter step
+    /// after its updates: a non-finite off-diagonal P_ab reaches the
+    /// diagonal or the state within one step. The prediction forms every
+    /// diagonal entry of a plant row from all the covariances of that
+    /// row's non-zero columns, and the p4 row of Φ reaches every state but
+    /// ẋ_v (so any pair without ẋ_v hits P_p4p4); a non-finite P(ẋ_v, b)
+    /// moves into the p4 column in the prediction, which the p4 reading's
+    /// update then spreads into the gain, the state and the diagonal. A
+    /// non-finite Φ entry or noise lands on the diagonal directly.
+    pub fn check_finite(&self) -> Result<(), EkfError> {
+        if all_finite(
+            (0..N)
+                .map(|i| self.x[i])
+                .chain((0..N).map(|i| self.p[(i, i)])),
+        ) {
             Ok(())
         } else {
             Err(EkfError::NonFinite)
@@ -141,6 +160,15 @@ impl<T: Real, const N: usize> Ekf<T, N> {
         }
         m
     }
+}
+
+/// Every value is finite: v·0 is ±0 for a finite v and NaN for ±∞ or
+/// NaN, and a sum of zeros stays zero while any NaN makes it NaN.
+/// Branch-free, two FPU operations per value, exact (no overflow can fake
+/// a failure).
+#[inline(always)]
+fn all_finite<T: Real>(values: impl Iterator<Item = T>) -> bool {
+    values.fold(T::ZERO, |acc, v| acc + v * T::ZERO) == T::ZERO
 }
 
 /// P ← (P + Pᵀ)/2.
@@ -212,8 +240,35 @@ mod tests {
             f.update_state(1, 1.0, f32::NAN, 1),
             Err(EkfError::InnovationCovariance { index: 1 })
         );
-        let err = f.update_state(0, f32::INFINITY, 1.0, 2);
-        assert_eq!(err, Err(EkfError::NonFinite));
+        // An infinite reading makes the state non-finite: the step's check
+        // reports it.
+        assert!(f.update_state(0, f32::INFINITY, 1.0, 2).is_ok());
+        assert_eq!(f.check_finite(), Err(EkfError::NonFinite));
+        // A covariance that is already non-finite is the cause, and named so.
+        let mut g = Ekf::<f32, 2>::new(Vector2::new(0.0, 0.0), &Vector2::new(f32::NAN, 1.0));
+        assert_eq!(g.update_state(0, 1.0, 1.0, 0), Err(EkfError::NonFinite));
+    }
+
+    #[test]
+    fn the_finiteness_check_sees_the_state_and_the_diagonal() {
+        let ok = Ekf::<f32, 3>::new(Vector2::new(0.0, 0.0).push(1.0), &SVector::repeat(2.0));
+        assert_eq!(ok.check_finite(), Ok(()));
+        for bad in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
+            for i in 0..3 {
+                let mut f = ok.clone();
+                f.x[i] = bad;
+                assert_eq!(f.check_finite(), Err(EkfError::NonFinite));
+                let mut f = ok.clone();
+                f.p[(i, i)] = bad;
+                assert_eq!(f.check_finite(), Err(EkfError::NonFinite));
+            }
+        }
+        // Huge but finite values are not failures (no overflow in the test).
+        let mut f = ok.clone();
+        f.x[0] = f32::MAX;
+        f.x[1] = f32::MAX;
+        f.p[(2, 2)] = f32::MAX;
+        assert_eq!(f.check_finite(), Ok(()));
     }
 
     #[test]
@@ -229,8 +284,7 @@ mod tests {
             f.predict_covariance(
                 &Matrix2::new(1.0, 1e-3, 0.0, 1.0),
                 &Vector2::new(1e-9, 1e-9),
-            )
-            .unwrap();
+            );
         }
         assert_eq!(f.p[(0, 1)], f.p[(1, 0)]);
         assert!(f.p[(0, 0)] >= 0.0 && f.p[(1, 1)] >= 0.0);
