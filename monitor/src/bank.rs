@@ -175,33 +175,55 @@ impl<T: Real, const N: usize> HypothesisFilter<T, N> {
         noise: &ProcessNoise<T>,
         m: &Measurement<T>,
     ) -> Result<FilterOutput<T>, EkfError> {
+        let e = self.predict_mean(plant, ctx);
+        let phi = Transition::new(&e, ctx.step.dt, &ctx.spool_dt, self.hypothesis);
+        let q = Self::process_noise(noise, ctx.step.dt);
+        phi.predict_covariance(&mut self.ekf.p, &q);
+        let out = self.update(ctx, m, &e)?;
+        // Once per step, after everything that could go wrong.
+        self.ekf.check_finite()?;
+        Ok(out)
+    }
+
+    /// Advance the plant states through the nonlinear model; returns the
+    /// model at the start of the step (its Jacobian linearises Φ).
+    fn predict_mean(&mut self, plant: &Plant<T>, ctx: &StepContext<T>) -> Eval<T> {
         let leaks = self.leaks();
         let nuis = self.nuisance();
-        let mut s = [T::ZERO; NX];
-        for (i, v) in s.iter_mut().enumerate() {
-            *v = self.ekf.x[i];
-        }
+        let mut s: [T; NX] = core::array::from_fn(|i| self.ekf.x[i]);
         let e = plant.advance(&mut s, &ctx.inputs, nuis, leaks, &ctx.step);
         for (i, v) in s.iter().enumerate() {
             self.ekf.x[i] = *v;
         }
-        let phi = self.transition(&e, ctx.step.dt, &ctx.spool_dt);
-        let mut q = SVector::<T, N>::zeros();
-        for i in 0..NB {
-            q[i] = noise.base[i] * ctx.step.dt;
-        }
-        for i in NB..N {
-            q[i] = noise.leak * ctx.step.dt;
-        }
-        self.ekf.predict_covariance(&phi, &q);
+        e
+    }
 
-        let mut weights = SVector::<T, N>::repeat(T::ONE);
-        weights[GAIN_EXT] = ctx.gain_learning;
-        weights[GAIN_RET] = ctx.gain_learning;
-        weights[LAMINAR] = ctx.learning;
-        for i in NB..N {
-            weights[i] = ctx.learning;
-        }
+    /// Process noise variance over `dt` per state (diagonal of Q).
+    fn process_noise(noise: &ProcessNoise<T>, dt: T) -> [T; N] {
+        core::array::from_fn(|i| {
+            if i < NB {
+                noise.base[i] * dt
+            } else {
+                noise.leak * dt
+            }
+        })
+    }
+
+    /// The three scalar updates (x_p, p3, p4) and the step's outputs.
+    fn update(
+        &mut self,
+        ctx: &StepContext<T>,
+        m: &Measurement<T>,
+        e: &Eval<T>,
+    ) -> Result<FilterOutput<T>, EkfError> {
+        // Plant states always learn; valve gains and the laminar and leak
+        // coefficients only as much as the sample is worth as evidence.
+        let weights: [T; N] = core::array::from_fn(|i| match i {
+            GAIN_EXT | GAIN_RET => ctx.gain_learning,
+            LAMINAR => ctx.learning,
+            i if i >= NB => ctx.learning,
+            _ => T::ONE,
+        });
         let mut out = FilterOutput::default();
         let mut log_det = T::ONE;
         for (k, &j) in MEASURED.iter().enumerate() {
@@ -245,60 +267,176 @@ impl<T: Real, const N: usize> HypothesisFilter<T, N> {
         out.flow_external_lpm = out.leak_external * dp_ext;
         out.flow_internal_sd_lpm = out.leak_internal_sd * dp_int;
         out.flow_external_sd_lpm = out.leak_external_sd * dp_ext;
-        // Once per step, after everything that could go wrong.
-        self.ekf.check_finite()?;
         Ok(out)
     }
+}
 
-    /// The discrete transition Jacobian Φ of `Plant::advance` over `dt`,
-    /// linearised at the start of the step: the explicit part of each row
-    /// divided by (1 − dt·d) where the scheme treats its diagonal `d`
-    /// implicitly; the spool block from its exact map; position from the
-    /// updated velocity (symplectic Euler).
-    pub fn transition(&self, e: &Eval<T>, dt: T, spool: &SpoolStep<T>) -> SMatrix<T, N, N> {
+/// Columns of Φ's position and velocity rows: x_p, ẋ_p, p3, p4.
+const MECHANICS: [usize; 4] = [XP, VP, P3, P4];
+/// Rows and columns of Φ's spool block: x_v, ẋ_v.
+const SPOOL: [usize; 2] = [XV, VV];
+
+/// The discrete transition Jacobian Φ of `Plant::advance` over one step,
+/// stored by its non-zero entries.
+///
+/// Φ is the identity except in the six plant rows (the nuisance and leak
+/// states are random walks), and those rows are sparse: position and
+/// velocity depend on x_p, ẋ_p, p3, p4; the spool pair only on itself;
+/// the pressures on everything but ẋ_v (the spool acts through x_v).
+/// The pressure rows are kept as full rows with structural zeros at ẋ_v
+/// (skipped) and at a leak the hypothesis lacks (multiplied, harmlessly).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Transition<T, const N: usize> {
+    /// Row x_p at the columns [`MECHANICS`].
+    pub position: [T; 4],
+    /// Row ẋ_p at the columns [`MECHANICS`].
+    pub velocity: [T; 4],
+    /// Rows x_v, ẋ_v at the columns x_v, ẋ_v.
+    pub spool: [[T; 2]; 2],
+    /// Row p3, all columns (zero at ẋ_v).
+    pub p3: [T; N],
+    /// Row p4, all columns (zero at ẋ_v).
+    pub p4: [T; N],
+}
+
+impl<T: Real, const N: usize> Transition<T, N> {
+    /// Φ over `dt` for `hypothesis`, linearised at the start of the step:
+    /// the explicit part of each row divided by (1 − dt·d) where the
+    /// scheme treats its diagonal `d` implicitly; the spool block from its
+    /// exact map; position from the updated velocity (symplectic Euler).
+    pub fn new(e: &Eval<T>, dt: T, spool: &SpoolStep<T>, hypothesis: Hypothesis) -> Self {
         let j = &e.jac;
-        let li = self.hypothesis.internal_index();
-        let le = self.hypothesis.external_index();
-        let mut phi = SMatrix::<T, N, N>::identity();
         let stiff = crate::model::stiff::<T>;
         let g = dt / (T::ONE - dt * stiff(j.v_v));
-        phi[(VP, XP)] = g * j.v_x;
-        phi[(VP, VP)] = T::ONE + g * j.v_v;
-        phi[(VP, P3)] = g * j.v_p3;
-        phi[(VP, P4)] = g * j.v_p4;
+        let velocity = [g * j.v_x, T::ONE + g * j.v_v, g * j.v_p3, g * j.v_p4];
+        // x_p ← x_p + dt·ẋ_p(new): the identity row plus dt × the velocity row.
         let ratio = dt * T::c(V_REF / X_REF);
-        for c in [XP, VP, P3, P4] {
-            let v = phi[(VP, c)];
-            phi[(XP, c)] += ratio * v;
-        }
-        phi[(XV, XV)] = spool.phi[0][0];
-        phi[(XV, VV)] = spool.phi[0][1];
-        phi[(VV, XV)] = spool.phi[1][0];
-        phi[(VV, VV)] = spool.phi[1][1];
+        let position = [
+            T::ONE + ratio * velocity[0],
+            ratio * velocity[1],
+            ratio * velocity[2],
+            ratio * velocity[3],
+        ];
         let g3 = dt / (T::ONE - dt * stiff(j.p3_p3));
-        phi[(P3, XP)] = g3 * j.p3_x;
-        phi[(P3, VP)] = g3 * j.p3_v;
-        phi[(P3, XV)] = g3 * j.p3_xv;
-        phi[(P3, P3)] = T::ONE + g3 * j.p3_p3;
-        phi[(P3, P4)] = g3 * j.p3_p4;
         let g4 = dt / (T::ONE - dt * stiff(j.p4_p4));
-        phi[(P4, XP)] = g4 * j.p4_x;
-        phi[(P4, VP)] = g4 * j.p4_v;
-        phi[(P4, XV)] = g4 * j.p4_xv;
-        phi[(P4, P3)] = g4 * j.p4_p3;
-        phi[(P4, P4)] = T::ONE + g4 * j.p4_p4;
-        phi[(P3, GAIN_EXT)] = g3 * j.p3_ge;
-        phi[(P4, GAIN_EXT)] = g4 * j.p4_ge;
-        phi[(P3, GAIN_RET)] = g3 * j.p3_gr;
-        phi[(P4, GAIN_RET)] = g4 * j.p4_gr;
-        phi[(P3, LAMINAR)] = g3 * j.p3_lam;
-        phi[(P4, LAMINAR)] = g4 * j.p4_lam;
-        if let Some(i) = li {
-            phi[(P3, i)] = g3 * j.p3_li;
-            phi[(P4, i)] = g4 * j.p4_li;
+        let mut p3 = [T::ZERO; N];
+        let mut p4 = [T::ZERO; N];
+        p3[XP] = g3 * j.p3_x;
+        p3[VP] = g3 * j.p3_v;
+        p3[XV] = g3 * j.p3_xv;
+        p3[P3] = T::ONE + g3 * j.p3_p3;
+        p3[P4] = g3 * j.p3_p4;
+        p3[GAIN_EXT] = g3 * j.p3_ge;
+        p3[GAIN_RET] = g3 * j.p3_gr;
+        p3[LAMINAR] = g3 * j.p3_lam;
+        p4[XP] = g4 * j.p4_x;
+        p4[VP] = g4 * j.p4_v;
+        p4[XV] = g4 * j.p4_xv;
+        p4[P3] = g4 * j.p4_p3;
+        p4[P4] = T::ONE + g4 * j.p4_p4;
+        p4[GAIN_EXT] = g4 * j.p4_ge;
+        p4[GAIN_RET] = g4 * j.p4_gr;
+        p4[LAMINAR] = g4 * j.p4_lam;
+        if let Some(i) = hypothesis.internal_index() {
+            p3[i] = g3 * j.p3_li;
+            p4[i] = g4 * j.p4_li;
         }
-        if let Some(i) = le {
-            phi[(P4, i)] = g4 * j.p4_le;
+        if let Some(i) = hypothesis.external_index() {
+            p4[i] = g4 * j.p4_le;
+        }
+        Self {
+            position,
+            velocity,
+            spool: spool.phi,
+            p3,
+            p4,
+        }
+    }
+
+    /// (Φ·v)_row = Σ_k Φ[row, k]·v(k) for a plant row, over its non-zero
+    /// columns in ascending order (the order of the dense product).
+    #[inline(always)]
+    fn row_dot(&self, row: usize, v: impl Fn(usize) -> T) -> T {
+        let mechanics = |c: &[T; 4]| {
+            c[0] * v(MECHANICS[0])
+                + c[1] * v(MECHANICS[1])
+                + c[2] * v(MECHANICS[2])
+                + c[3] * v(MECHANICS[3])
+        };
+        let pressure = |c: &[T; N]| {
+            let mut sum = c[XP] * v(XP) + c[VP] * v(VP) + c[XV] * v(XV);
+            for k in P3..N {
+                sum += c[k] * v(k);
+            }
+            sum
+        };
+        match row {
+            XP => mechanics(&self.position),
+            VP => mechanics(&self.velocity),
+            XV | VV => {
+                let c = &self.spool[row - XV];
+                c[0] * v(SPOOL[0]) + c[1] * v(SPOOL[1])
+            }
+            P3 => pressure(&self.p3),
+            _ => pressure(&self.p4),
+        }
+    }
+
+    /// P ← Φ·P·Φᵀ + diag(q), in place, touching only what Φ changes.
+    ///
+    /// With Φ = [[A, B], [0, I]] (A: the 6 plant rows and columns),
+    /// M = Φ_plant·P (6 × N) gives the plant–nuisance covariances directly,
+    /// M·Φ_plantᵀ the plant block, and the nuisance block keeps its
+    /// values. P is exactly symmetric, so the plant–nuisance entries need
+    /// no re-symmetrisation, and the plant block is re-symmetrised as
+    /// the dense form does.
+    pub fn predict_covariance(&self, p: &mut SMatrix<T, N, N>, q: &[T; N]) {
+        // M[a][c] = (Φ·P)[a, c] for the plant rows a; column c of P is row c.
+        let mut m = [[T::ZERO; N]; NX];
+        for c in 0..N {
+            for (a, row) in m.iter_mut().enumerate() {
+                row[c] = self.row_dot(a, |k| p[(k, c)]);
+            }
+        }
+        for (a, row) in m.iter().enumerate() {
+            for c in NX..N {
+                p[(a, c)] = row[c];
+                p[(c, a)] = row[c];
+            }
+        }
+        // Plant block (Φ·P·Φᵀ)[a, b] = Σ_k M[a][k]·Φ[b, k], symmetrised.
+        let block: [[T; NX]; NX] =
+            core::array::from_fn(|a| core::array::from_fn(|b| self.row_dot(b, |k| m[a][k])));
+        let half = T::c(0.5);
+        for a in 0..NX {
+            p[(a, a)] = block[a][a] + q[a];
+            for b in a + 1..NX {
+                let v = (block[a][b] + block[b][a]) * half;
+                p[(a, b)] = v;
+                p[(b, a)] = v;
+            }
+        }
+        for i in NX..N {
+            p[(i, i)] += q[i];
+        }
+    }
+
+    /// Φ as a dense matrix (the tests' reference).
+    #[cfg(test)]
+    pub fn dense(&self) -> SMatrix<T, N, N> {
+        let mut phi = SMatrix::<T, N, N>::identity();
+        for (i, &c) in MECHANICS.iter().enumerate() {
+            phi[(XP, c)] = self.position[i];
+            phi[(VP, c)] = self.velocity[i];
+        }
+        for (i, &r) in SPOOL.iter().enumerate() {
+            for (k, &c) in SPOOL.iter().enumerate() {
+                phi[(r, c)] = self.spool[i][k];
+            }
+        }
+        for c in 0..N {
+            phi[(P3, c)] = self.p3[c];
+            phi[(P4, c)] = self.p4[c];
         }
         phi
     }
@@ -390,11 +528,29 @@ mod tests {
         s0: [T; NX],
     }
 
+    /// Operating points: valve command and scaled plant state
+    /// `[x_p, ẋ_p, x_v, ẋ_v, p3, p4]`.
+    const POINTS: [(f64, [f64; NX]); 5] = [
+        // Extending with the valve open.
+        (0.2, [0.5, 0.2, 0.2, 0.0, 0.3, 0.12]),
+        // Holding, spool in the dead zone.
+        (0.0, [0.9, 0.0, 0.0, 0.0, 0.214, 0.129]),
+        // Retracting fast, spool still moving.
+        (-0.15, [1.2, -0.3, -0.15, 0.1, 0.14, 0.22]),
+        // Near the stroke end, laminar orifice region (Δp < 1 bar).
+        (0.3, [0.02, 0.0, 0.3, 0.0, 0.496, 0.012]),
+        // Past the stroke end (the position terms vanish).
+        (0.0, [1.85, 0.0, 0.0, 0.0, 0.2, 0.1]),
+    ];
+
     fn setting<T: Real>(moving: bool) -> Setting<T> {
+        at_point(if moving { POINTS[0] } else { POINTS[1] })
+    }
+
+    fn at_point<T: Real>((u, s0): (f64, [f64; NX])) -> Setting<T> {
         let params = Params::nominal();
         let plant = Plant::<T>::new(&params);
         let f = &params.filter;
-        let u = if moving { 0.2 } else { 0.0 };
         let ctx = StepContext {
             inputs: Inputs {
                 p_supply_pa: T::c(50.0 * BAR),
@@ -429,13 +585,12 @@ mod tests {
         };
         let sx = params.sensors.position_noise_m / 0.1;
         let sp = params.sensors.pressure_noise_bar * BAR / 1e7;
-        let v = if moving { 0.2 } else { 0.0 };
         Setting {
             plant,
             ctx,
             noise,
             r: [T::c(sx * sx), T::c(sp * sp), T::c(sp * sp)],
-            s0: [T::c(0.5), T::c(v), T::c(u), T::ZERO, T::c(0.3), T::c(0.12)],
+            s0: s0.map(T::c),
         }
     }
 
@@ -486,6 +641,189 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// Φ as the dense code built it before the sparse form (reference).
+    fn dense_transition<T: Real, const N: usize>(
+        h: Hypothesis,
+        e: &Eval<T>,
+        dt: T,
+        spool: &SpoolStep<T>,
+    ) -> SMatrix<T, N, N> {
+        let j = &e.jac;
+        let mut phi = SMatrix::<T, N, N>::identity();
+        let stiff = crate::model::stiff::<T>;
+        let g = dt / (T::ONE - dt * stiff(j.v_v));
+        phi[(VP, XP)] = g * j.v_x;
+        phi[(VP, VP)] = T::ONE + g * j.v_v;
+        phi[(VP, P3)] = g * j.v_p3;
+        phi[(VP, P4)] = g * j.v_p4;
+        let ratio = dt * T::c(V_REF / X_REF);
+        for c in [XP, VP, P3, P4] {
+            let v = phi[(VP, c)];
+            phi[(XP, c)] += ratio * v;
+        }
+        phi[(XV, XV)] = spool.phi[0][0];
+        phi[(XV, VV)] = spool.phi[0][1];
+        phi[(VV, XV)] = spool.phi[1][0];
+        phi[(VV, VV)] = spool.phi[1][1];
+        let g3 = dt / (T::ONE - dt * stiff(j.p3_p3));
+        phi[(P3, XP)] = g3 * j.p3_x;
+        phi[(P3, VP)] = g3 * j.p3_v;
+        phi[(P3, XV)] = g3 * j.p3_xv;
+        phi[(P3, P3)] = T::ONE + g3 * j.p3_p3;
+        phi[(P3, P4)] = g3 * j.p3_p4;
+        let g4 = dt / (T::ONE - dt * stiff(j.p4_p4));
+        phi[(P4, XP)] = g4 * j.p4_x;
+        phi[(P4, VP)] = g4 * j.p4_v;
+        phi[(P4, XV)] = g4 * j.p4_xv;
+        phi[(P4, P3)] = g4 * j.p4_p3;
+        phi[(P4, P4)] = T::ONE + g4 * j.p4_p4;
+        phi[(P3, GAIN_EXT)] = g3 * j.p3_ge;
+        phi[(P4, GAIN_EXT)] = g4 * j.p4_ge;
+        phi[(P3, GAIN_RET)] = g3 * j.p3_gr;
+        phi[(P4, GAIN_RET)] = g4 * j.p4_gr;
+        phi[(P3, LAMINAR)] = g3 * j.p3_lam;
+        phi[(P4, LAMINAR)] = g4 * j.p4_lam;
+        if let Some(i) = h.internal_index() {
+            phi[(P3, i)] = g3 * j.p3_li;
+            phi[(P4, i)] = g4 * j.p4_li;
+        }
+        if let Some(i) = h.external_index() {
+            phi[(P4, i)] = g4 * j.p4_le;
+        }
+        phi
+    }
+
+    /// The model at an operating point, with non-zero nuisance and leaks
+    /// so that every Jacobian entry is exercised.
+    fn eval_at<T: Real>(s: &Setting<T>) -> Eval<T> {
+        let nuis = Nuisance {
+            gain_extend: T::c(0.3),
+            gain_retract: T::c(-0.2),
+            laminar: T::c(0.4),
+        };
+        let leaks = Leaks {
+            internal: T::c(0.4),
+            external: T::c(0.3),
+        };
+        s.plant.eval(&s.s0, &s.ctx.inputs, nuis, leaks)
+    }
+
+    /// Sparse Φ and prediction against the dense references, at every
+    /// operating point, on random SPD covariances: Φ exactly, the
+    /// prediction within `tol` of the largest |P| entry.
+    fn prediction_matches_dense<T: Real, const N: usize>(h: Hypothesis, tol: f64) {
+        let mut rng = crate::ekf::TestRng(0x9e37_79b9_7f4a_7c15 ^ h as u64);
+        for point in POINTS {
+            let s = at_point::<T>(point);
+            let e = eval_at(&s);
+            let phi = Transition::<T, N>::new(&e, s.ctx.step.dt, &s.ctx.spool_dt, h);
+            let dense = dense_transition::<T, N>(h, &e, s.ctx.step.dt, &s.ctx.spool_dt);
+            assert_eq!(phi.dense(), dense, "{h:?} at {point:?}");
+            let q = HypothesisFilter::<T, N>::process_noise(&s.noise, s.ctx.step.dt);
+            for _ in 0..40 {
+                let p0 = rng.spd::<T, N>();
+                let mut fast = p0;
+                phi.predict_covariance(&mut fast, &q);
+                let mut slow = p0;
+                crate::ekf::predict_covariance_dense(&mut slow, &dense, &q);
+                let scale = slow.iter().fold(0.0f64, |m, v| m.max(v.abs().to_f64()));
+                for a in 0..N {
+                    for b in 0..N {
+                        let d = (fast[(a, b)] - slow[(a, b)]).abs().to_f64();
+                        assert!(d <= tol * scale, "{h:?} P[{a}, {b}]: {d:e}");
+                        assert_eq!(fast[(a, b)], fast[(b, a)]);
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn sparse_prediction_equals_the_dense_product() {
+        // Exactly: the same non-zero products, summed in the same order.
+        let tol = 0.0;
+        prediction_matches_dense::<f64, { NB }>(Hypothesis::Healthy, tol);
+        prediction_matches_dense::<f64, { NB + 1 }>(Hypothesis::Internal, tol);
+        prediction_matches_dense::<f64, { NB + 1 }>(Hypothesis::External, tol);
+        prediction_matches_dense::<f64, { NB + 2 }>(Hypothesis::Both, tol);
+        prediction_matches_dense::<f32, { NB }>(Hypothesis::Healthy, tol);
+        prediction_matches_dense::<f32, { NB + 1 }>(Hypothesis::Internal, tol);
+        prediction_matches_dense::<f32, { NB + 1 }>(Hypothesis::External, tol);
+        prediction_matches_dense::<f32, { NB + 2 }>(Hypothesis::Both, tol);
+    }
+
+    /// The whole filter step as the dense code did it: nonlinear mean,
+    /// dense Φ·P·Φᵀ, Joseph updates as matrix products.
+    fn dense_step<T: Real, const N: usize>(f: &mut HypothesisFilter<T, N>, s: &Setting<T>) {
+        // The readings of `step`: off the state before the step.
+        let x = f.ekf.x;
+        let z = [x[XP] + T::c(1e-4), x[P3] + T::c(1e-3), x[P4] - T::c(1e-3)];
+        let e = f.predict_mean(&s.plant, &s.ctx);
+        let phi = dense_transition::<T, N>(f.hypothesis, &e, s.ctx.step.dt, &s.ctx.spool_dt);
+        let q = HypothesisFilter::<T, N>::process_noise(&s.noise, s.ctx.step.dt);
+        crate::ekf::predict_covariance_dense(&mut f.ekf.p, &phi, &q);
+        let w: [T; N] = core::array::from_fn(|i| match i {
+            GAIN_EXT | GAIN_RET => s.ctx.gain_learning,
+            i if i >= LAMINAR => s.ctx.learning,
+            _ => T::ONE,
+        });
+        for (k, &j) in MEASURED.iter().enumerate() {
+            let lag = if j == XP {
+                T::ZERO
+            } else {
+                s.ctx.pressure_lag_s * e.f[j]
+            };
+            crate::ekf::joseph_update_dense(&mut f.ekf, j, z[k], s.r[k] + lag * lag, &w);
+        }
+    }
+
+    /// 500 steps of the optimised filter and of the dense one from the
+    /// same start, at every operating point: x within `tol_x` (relative to
+    /// 1 + |x|), P within `tol_p` of √(P_aa·P_bb).
+    fn filter_matches_dense<T: Real, const N: usize>(h: Hypothesis, tol_x: f64, tol_p: f64) {
+        for point in POINTS {
+            let s = at_point::<T>(point);
+            let p0 = [T::c(1e-3); NB];
+            let mut fast = HypothesisFilter::<T, N>::new(h, &s.s0, &p0, T::c(0.1));
+            let mut slow = fast.clone();
+            for _ in 0..500 {
+                step(&mut fast, &s).expect("a healthy filter step");
+                dense_step(&mut slow, &s);
+            }
+            let rel = |a: T, b: T, scale: f64| (a - b).abs().to_f64() / scale;
+            for a in 0..N {
+                let d = rel(
+                    fast.ekf.x[a],
+                    slow.ekf.x[a],
+                    1.0 + slow.ekf.x[a].abs().to_f64(),
+                );
+                assert!(d <= tol_x, "{h:?} at {point:?}: x[{a}] differs by {d:e}");
+                for b in 0..N {
+                    let scale = (slow.ekf.p[(a, a)] * slow.ekf.p[(b, b)]).sqrt().to_f64();
+                    let d = rel(fast.ekf.p[(a, b)], slow.ekf.p[(a, b)], scale);
+                    assert!(
+                        d <= tol_p,
+                        "{h:?} at {point:?}: P[{a}, {b}] differs by {d:e}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn filter_steps_equal_the_dense_filter() {
+        // The dense Joseph update (matrix products) rounds differently
+        // from the elementwise one: f64 agrees to ~1e-13, f32 to ~1e-5.
+        filter_matches_dense::<f64, { NB }>(Hypothesis::Healthy, 1e-13, 1e-11);
+        filter_matches_dense::<f64, { NB + 1 }>(Hypothesis::Internal, 1e-13, 1e-11);
+        filter_matches_dense::<f64, { NB + 1 }>(Hypothesis::External, 1e-13, 1e-11);
+        filter_matches_dense::<f64, { NB + 2 }>(Hypothesis::Both, 1e-13, 1e-11);
+        filter_matches_dense::<f32, { NB }>(Hypothesis::Healthy, 1e-5, 3e-4);
+        filter_matches_dense::<f32, { NB + 1 }>(Hypothesis::Internal, 1e-5, 3e-4);
+        filter_matches_dense::<f32, { NB + 1 }>(Hypothesis::External, 1e-5, 3e-4);
+        filter_matches_dense::<f32, { NB + 2 }>(Hypothesis::Both, 1e-5, 3e-4);
     }
 
     #[test]
