@@ -32,6 +32,8 @@ pub const GAIN_RET: usize = NX + 1;
 pub const LAMINAR: usize = NX + 2;
 /// States before the leak coefficients (plant + nuisance).
 pub const NB: usize = NX + 3;
+/// States of the largest filter (both leaks).
+pub const MAX_STATES: usize = NB + 2;
 const MEASURED: [usize; NZ] = [XP, P3, P4];
 
 /// One sample's measurements in scaled filter units (see `model`), with
@@ -81,6 +83,17 @@ pub struct FilterOutput<T> {
     pub valve_flow_lpm: T,
 }
 
+/// What the three scalar updates of one step saw.
+#[derive(Clone, Copy, Debug)]
+struct Innovations<T> {
+    /// Innovations, scaled units.
+    innovation: [T; NZ],
+    /// Σν²/s.
+    nis: T,
+    /// Product of the innovation variances (det S).
+    det: T,
+}
+
 /// Per-step settings shared by the filters.
 #[derive(Clone, Debug)]
 pub struct StepContext<T> {
@@ -108,6 +121,18 @@ pub struct ProcessNoise<T> {
     pub base: [T; NB],
     /// Leak coefficient random walk.
     pub leak: T,
+}
+
+impl<T: Real> ProcessNoise<T> {
+    /// Process noise variances over `dt` seconds (the diagonal of Q), in
+    /// the state layout of the largest filter; every filter uses the
+    /// leading entries of its own size.
+    pub fn variances(&self, dt: T) -> [T; MAX_STATES] {
+        core::array::from_fn(|i| {
+            let intensity = if i < NB { self.base[i] } else { self.leak };
+            intensity * dt
+        })
+    }
 }
 
 /// One hypothesis' filter: plant states plus `N − 6` leak coefficients.
@@ -167,22 +192,25 @@ impl<T: Real, const N: usize> HypothesisFilter<T, N> {
         }
     }
 
-    /// Predict over one step and update with `m`.
+    /// Predict over one step with process noise variances `q`
+    /// ([`ProcessNoise::variances`]), update with `m`, and write what the
+    /// filter did into `out` (every field; untouched on an error).
     pub fn step(
         &mut self,
         plant: &Plant<T>,
         ctx: &StepContext<T>,
-        noise: &ProcessNoise<T>,
+        q: &[T; MAX_STATES],
         m: &Measurement<T>,
-    ) -> Result<FilterOutput<T>, EkfError> {
+        out: &mut FilterOutput<T>,
+    ) -> Result<(), EkfError> {
         let e = self.predict_mean(plant, ctx);
         let phi = Transition::new(&e, ctx.step.dt, &ctx.spool_dt, self.hypothesis);
-        let q = Self::process_noise(noise, ctx.step.dt);
-        phi.predict_covariance(&mut self.ekf.p, &q);
-        let out = self.update(ctx, m, &e)?;
+        phi.predict_covariance(&mut self.ekf.p, q);
+        let inn = self.update(ctx, m, &e)?;
         // Once per step, after everything that could go wrong.
         self.ekf.check_finite()?;
-        Ok(out)
+        self.write_output(ctx, &e, &inn, out);
+        Ok(())
     }
 
     /// Advance the plant states through the nonlinear model; returns the
@@ -198,24 +226,14 @@ impl<T: Real, const N: usize> HypothesisFilter<T, N> {
         e
     }
 
-    /// Process noise variance over `dt` per state (diagonal of Q).
-    fn process_noise(noise: &ProcessNoise<T>, dt: T) -> [T; N] {
-        core::array::from_fn(|i| {
-            if i < NB {
-                noise.base[i] * dt
-            } else {
-                noise.leak * dt
-            }
-        })
-    }
-
-    /// The three scalar updates (x_p, p3, p4) and the step's outputs.
+    /// The three scalar updates (x_p, p3, p4): innovations, NIS and the
+    /// product of the innovation variances.
     fn update(
         &mut self,
         ctx: &StepContext<T>,
         m: &Measurement<T>,
         e: &Eval<T>,
-    ) -> Result<FilterOutput<T>, EkfError> {
+    ) -> Result<Innovations<T>, EkfError> {
         // Plant states always learn; valve gains and the laminar and leak
         // coefficients only as much as the sample is worth as evidence.
         let weights: [T; N] = core::array::from_fn(|i| match i {
@@ -224,8 +242,11 @@ impl<T: Real, const N: usize> HypothesisFilter<T, N> {
             i if i >= NB => ctx.learning,
             _ => T::ONE,
         });
-        let mut out = FilterOutput::default();
-        let mut log_det = T::ONE;
+        let mut inn = Innovations {
+            innovation: [T::ZERO; NZ],
+            nis: T::ZERO,
+            det: T::ONE,
+        };
         for (k, &j) in MEASURED.iter().enumerate() {
             let lag = if j == XP {
                 T::ZERO
@@ -236,27 +257,42 @@ impl<T: Real, const N: usize> HypothesisFilter<T, N> {
             let u = self
                 .ekf
                 .update_state_weighted(j, m.z[k], r, k as u8, &weights)?;
-            out.innovation[k] = u.innovation;
-            out.nis += u.innovation * u.innovation / u.variance;
-            log_det *= u.variance;
+            inn.innovation[k] = u.innovation;
+            inn.nis += u.innovation * u.innovation / u.variance;
+            inn.det *= u.variance;
         }
+        Ok(inn)
+    }
+
+    /// Estimate `x_i` of an optional leak state and its standard deviation
+    /// (zeros if the hypothesis has no such leak).
+    fn leak(&self, index: Option<usize>) -> (T, T) {
+        index.map_or((T::ZERO, T::ZERO), |i| {
+            (self.ekf.x[i], self.ekf.p[(i, i)].max(T::ZERO).sqrt())
+        })
+    }
+
+    /// Write every field of the step's output (in place: no copies).
+    fn write_output(
+        &self,
+        ctx: &StepContext<T>,
+        e: &Eval<T>,
+        inn: &Innovations<T>,
+        out: &mut FilterOutput<T>,
+    ) {
+        out.innovation = inn.innovation;
+        out.nis = inn.nis;
         // ln N(ν; 0, S) = −½·(νᵀS⁻¹ν + ln det S + 3·ln 2π).
         out.log_likelihood =
-            T::c(-0.5) * (out.nis + log_det.ln() + T::c(3.0 * 1.837_877_066_409_345_5));
+            T::c(-0.5) * (inn.nis + inn.det.ln() + T::c(3.0 * 1.837_877_066_409_345_5));
         out.accel = (e.f[VP] * T::c(V_REF)).abs();
         out.pressure_rate_bar_s =
             e.f[P3].abs().max(e.f[P4].abs()) * T::c(P_REF / crate::model::BAR);
         out.valve_flow_lpm = e.q_valve_a.abs() * T::c(crate::model::LPM_PER_M3S);
         let gref = T::c(crate::model::GAIN_REF);
         out.valve_gain = [self.ekf.x[GAIN_EXT] * gref, self.ekf.x[GAIN_RET] * gref];
-        if let Some(i) = self.hypothesis.internal_index() {
-            out.leak_internal = self.ekf.x[i];
-            out.leak_internal_sd = self.ekf.p[(i, i)].max(T::ZERO).sqrt();
-        }
-        if let Some(i) = self.hypothesis.external_index() {
-            out.leak_external = self.ekf.x[i];
-            out.leak_external_sd = self.ekf.p[(i, i)].max(T::ZERO).sqrt();
-        }
+        (out.leak_internal, out.leak_internal_sd) = self.leak(self.hypothesis.internal_index());
+        (out.leak_external, out.leak_external_sd) = self.leak(self.hypothesis.external_index());
         // Leak flow magnitude at the updated pressures: θ·|Δp| / 10 bar (a
         // seal leaks whichever way the pressure difference pushes; a
         // negative θ is an estimate below the healthy baseline).
@@ -267,7 +303,6 @@ impl<T: Real, const N: usize> HypothesisFilter<T, N> {
         out.flow_external_lpm = out.leak_external * dp_ext;
         out.flow_internal_sd_lpm = out.leak_internal_sd * dp_int;
         out.flow_external_sd_lpm = out.leak_external_sd * dp_ext;
-        Ok(out)
     }
 }
 
@@ -319,31 +354,34 @@ impl<T: Real, const N: usize> Transition<T, N> {
         ];
         let g3 = dt / (T::ONE - dt * stiff(j.p3_p3));
         let g4 = dt / (T::ONE - dt * stiff(j.p4_p4));
-        let mut p3 = [T::ZERO; N];
-        let mut p4 = [T::ZERO; N];
-        p3[XP] = g3 * j.p3_x;
-        p3[VP] = g3 * j.p3_v;
-        p3[XV] = g3 * j.p3_xv;
-        p3[P3] = T::ONE + g3 * j.p3_p3;
-        p3[P4] = g3 * j.p3_p4;
-        p3[GAIN_EXT] = g3 * j.p3_ge;
-        p3[GAIN_RET] = g3 * j.p3_gr;
-        p3[LAMINAR] = g3 * j.p3_lam;
-        p4[XP] = g4 * j.p4_x;
-        p4[VP] = g4 * j.p4_v;
-        p4[XV] = g4 * j.p4_xv;
-        p4[P3] = g4 * j.p4_p3;
-        p4[P4] = T::ONE + g4 * j.p4_p4;
-        p4[GAIN_EXT] = g4 * j.p4_ge;
-        p4[GAIN_RET] = g4 * j.p4_gr;
-        p4[LAMINAR] = g4 * j.p4_lam;
-        if let Some(i) = hypothesis.internal_index() {
-            p3[i] = g3 * j.p3_li;
-            p4[i] = g4 * j.p4_li;
-        }
-        if let Some(i) = hypothesis.external_index() {
-            p4[i] = g4 * j.p4_le;
-        }
+        let li = hypothesis.internal_index();
+        let le = hypothesis.external_index();
+        let p3 = core::array::from_fn(|c| match c {
+            XP => g3 * j.p3_x,
+            VP => g3 * j.p3_v,
+            XV => g3 * j.p3_xv,
+            P3 => T::ONE + g3 * j.p3_p3,
+            P4 => g3 * j.p3_p4,
+            GAIN_EXT => g3 * j.p3_ge,
+            GAIN_RET => g3 * j.p3_gr,
+            LAMINAR => g3 * j.p3_lam,
+            c if Some(c) == li => g3 * j.p3_li,
+            // ẋ_v; the external leak drains the rod side only.
+            _ => T::ZERO,
+        });
+        let p4 = core::array::from_fn(|c| match c {
+            XP => g4 * j.p4_x,
+            VP => g4 * j.p4_v,
+            XV => g4 * j.p4_xv,
+            P3 => g4 * j.p4_p3,
+            P4 => T::ONE + g4 * j.p4_p4,
+            GAIN_EXT => g4 * j.p4_ge,
+            GAIN_RET => g4 * j.p4_gr,
+            LAMINAR => g4 * j.p4_lam,
+            c if Some(c) == li => g4 * j.p4_li,
+            c if Some(c) == le => g4 * j.p4_le,
+            _ => T::ZERO,
+        });
         Self {
             position,
             velocity,
@@ -390,14 +428,11 @@ impl<T: Real, const N: usize> Transition<T, N> {
     /// values. P is exactly symmetric, so the plant–nuisance entries need
     /// no re-symmetrisation, and the plant block is re-symmetrised as
     /// the dense form does.
-    pub fn predict_covariance(&self, p: &mut SMatrix<T, N, N>, q: &[T; N]) {
+    pub fn predict_covariance(&self, p: &mut SMatrix<T, N, N>, q: &[T; MAX_STATES]) {
+        const { assert!(N <= MAX_STATES) };
         // M[a][c] = (Φ·P)[a, c] for the plant rows a; column c of P is row c.
-        let mut m = [[T::ZERO; N]; NX];
-        for c in 0..N {
-            for (a, row) in m.iter_mut().enumerate() {
-                row[c] = self.row_dot(a, |k| p[(k, c)]);
-            }
-        }
+        let m: [[T; N]; NX] =
+            core::array::from_fn(|a| core::array::from_fn(|c| self.row_dot(a, |k| p[(k, c)])));
         for (a, row) in m.iter().enumerate() {
             for c in NX..N {
                 p[(a, c)] = row[c];
@@ -442,6 +477,24 @@ impl<T: Real, const N: usize> Transition<T, N> {
     }
 }
 
+/// Step `filter`, its output into `slot` (`None` if it failed).
+fn step_into<T: Real, const N: usize>(
+    filter: &mut HypothesisFilter<T, N>,
+    plant: &Plant<T>,
+    ctx: &StepContext<T>,
+    q: &[T; MAX_STATES],
+    m: &Measurement<T>,
+    slot: &mut Option<FilterOutput<T>>,
+) -> Result<(), EkfError> {
+    // (The default is overwritten field by field: the output is never
+    // built elsewhere and copied.)
+    let result = filter.step(plant, ctx, q, m, slot.insert(FilterOutput::default()));
+    if result.is_err() {
+        *slot = None;
+    }
+    result
+}
+
 /// The four filters.
 #[derive(Clone, Debug)]
 pub struct Bank<T: Real> {
@@ -455,8 +508,9 @@ pub struct Bank<T: Real> {
     pub both: HypothesisFilter<T, { NB + 2 }>,
 }
 
-/// Outcome of one bank step: per hypothesis, in `Hypothesis::ALL` order.
-pub type BankOutput<T> = [Result<FilterOutput<T>, EkfError>; 4];
+/// Outcome of one bank step: per hypothesis, in `Hypothesis::ALL` order,
+/// what the filter did (`None` if it failed).
+pub type BankOutput<T> = [Option<FilterOutput<T>>; 4];
 
 impl<T: Real> Bank<T> {
     /// All four filters started at plant state `s0`.
@@ -469,20 +523,25 @@ impl<T: Real> Bank<T> {
         }
     }
 
-    /// Step every filter. A filter that fails is reported, not stopped:
-    /// the caller re-initialises it.
+    /// Step every filter, writing their outputs into `out` (in place: no
+    /// copies of the outputs). A filter that fails is reported, not
+    /// stopped: its output is `None` and the returned result says why; the
+    /// caller re-initialises it.
     pub fn step(
         &mut self,
         plant: &Plant<T>,
         ctx: &StepContext<T>,
         noise: &ProcessNoise<T>,
         m: &Measurement<T>,
-    ) -> BankOutput<T> {
+        out: &mut BankOutput<T>,
+    ) -> [Result<(), EkfError>; 4] {
+        let q = noise.variances(ctx.step.dt);
+        let [o_healthy, o_internal, o_external, o_both] = out;
         [
-            self.healthy.step(plant, ctx, noise, m),
-            self.internal.step(plant, ctx, noise, m),
-            self.external.step(plant, ctx, noise, m),
-            self.both.step(plant, ctx, noise, m),
+            step_into(&mut self.healthy, plant, ctx, &q, m, o_healthy),
+            step_into(&mut self.internal, plant, ctx, &q, m, o_internal),
+            step_into(&mut self.external, plant, ctx, &q, m, o_external),
+            step_into(&mut self.both, plant, ctx, &q, m, o_both),
         ]
     }
 
@@ -598,13 +657,14 @@ mod tests {
     fn step<T: Real, const N: usize>(
         f: &mut HypothesisFilter<T, N>,
         s: &Setting<T>,
-    ) -> Result<FilterOutput<T>, EkfError> {
+    ) -> Result<(), EkfError> {
         let x = &f.ekf.x;
         let m = Measurement {
             z: [x[XP] + T::c(1e-4), x[P3] + T::c(1e-3), x[P4] - T::c(1e-3)],
             r: s.r,
         };
-        f.step(&s.plant, &s.ctx, &s.noise, &m)
+        let q = s.noise.variances(s.ctx.step.dt);
+        f.step(&s.plant, &s.ctx, &q, &m, &mut FilterOutput::default())
     }
 
     /// A filter of hypothesis `h` run for 200 steps: the covariance is
@@ -630,13 +690,13 @@ mod tests {
                         let mut f = good.clone();
                         f.ekf.p[(a, b)] = bad;
                         f.ekf.p[(b, a)] = bad;
-                        let got = step(&mut f, &s).map(|_| ());
+                        let got = step(&mut f, &s);
                         let at = (h, moving, bad, a, b);
                         assert_eq!(got, Err(EkfError::NonFinite), "P at {at:?}");
                     }
                     let mut f = good.clone();
                     f.ekf.x[a] = bad;
-                    let got = step(&mut f, &s).map(|_| ());
+                    let got = step(&mut f, &s);
                     assert_eq!(got, Err(EkfError::NonFinite), "x at {:?}", (h, a));
                 }
             }
@@ -721,13 +781,14 @@ mod tests {
             let phi = Transition::<T, N>::new(&e, s.ctx.step.dt, &s.ctx.spool_dt, h);
             let dense = dense_transition::<T, N>(h, &e, s.ctx.step.dt, &s.ctx.spool_dt);
             assert_eq!(phi.dense(), dense, "{h:?} at {point:?}");
-            let q = HypothesisFilter::<T, N>::process_noise(&s.noise, s.ctx.step.dt);
+            let q = s.noise.variances(s.ctx.step.dt);
+            let q_n: [T; N] = core::array::from_fn(|i| q[i]);
             for _ in 0..40 {
                 let p0 = rng.spd::<T, N>();
                 let mut fast = p0;
                 phi.predict_covariance(&mut fast, &q);
                 let mut slow = p0;
-                crate::ekf::predict_covariance_dense(&mut slow, &dense, &q);
+                crate::ekf::predict_covariance_dense(&mut slow, &dense, &q_n);
                 let scale = slow.iter().fold(0.0f64, |m, v| m.max(v.abs().to_f64()));
                 for a in 0..N {
                     for b in 0..N {
@@ -762,7 +823,8 @@ mod tests {
         let z = [x[XP] + T::c(1e-4), x[P3] + T::c(1e-3), x[P4] - T::c(1e-3)];
         let e = f.predict_mean(&s.plant, &s.ctx);
         let phi = dense_transition::<T, N>(f.hypothesis, &e, s.ctx.step.dt, &s.ctx.spool_dt);
-        let q = HypothesisFilter::<T, N>::process_noise(&s.noise, s.ctx.step.dt);
+        let q = s.noise.variances(s.ctx.step.dt);
+        let q: [T; N] = core::array::from_fn(|i| q[i]);
         crate::ekf::predict_covariance_dense(&mut f.ekf.p, &phi, &q);
         let w: [T; N] = core::array::from_fn(|i| match i {
             GAIN_EXT | GAIN_RET => s.ctx.gain_learning,

@@ -2,7 +2,7 @@
 //! status. Deterministic: the same samples give the same statuses, bit for
 //! bit, on any IEEE-754 machine (see `real.rs`).
 
-use crate::bank::{Bank, FilterOutput, Measurement, ProcessNoise, StepContext, NB, NZ};
+use crate::bank::{Bank, BankOutput, Measurement, ProcessNoise, StepContext, NB, NZ};
 use crate::decision::Decision;
 use crate::ekf::EkfError;
 use crate::fluid::laminar_flow_factor;
@@ -212,11 +212,11 @@ impl<T: Real> Monitor<T> {
             learning: self.quiet.weight(),
             gain_learning: self.quiet.gain_weight(),
         };
-        let outputs = bank.step(&self.plant, &ctx, &self.cfg.noise, &m);
-        let mut ok: [Option<FilterOutput<T>>; 4] = [None; 4];
-        for (i, out) in outputs.into_iter().enumerate() {
-            match out {
-                Ok(o) => ok[i] = Some(o),
+        let mut ok: BankOutput<T> = [None; 4];
+        let results = bank.step(&self.plant, &ctx, &self.cfg.noise, &m, &mut ok);
+        for (i, result) in results.into_iter().enumerate() {
+            match result {
+                Ok(()) => {}
                 Err(EkfError::InnovationCovariance { .. }) | Err(EkfError::NonFinite) => {
                     let h = Hypothesis::ALL[i];
                     // Restart the failed filter from the healthy filter's
