@@ -149,15 +149,18 @@ impl<T: Real, const N: usize> Ekf<T, N> {
 /// Joseph-form covariance update for a reading of state j (h = e_j), gain
 /// `k`, innovation variance `s` = P_jj + r and `pj` = P·e_j before the
 /// update. Elementwise, valid for any gain:
-/// (I − k·hᵀ)·P·(I − k·hᵀ)ᵀ + k·r·kᵀ = P − k·pjᵀ − pj·kᵀ + s·k·kᵀ.
-/// Only the upper triangle is computed and mirrored: P stays exactly
-/// symmetric.
+/// (I − k·hᵀ)·P·(I − k·hᵀ)ᵀ + k·r·kᵀ = P − k·pjᵀ − pj·kᵀ + s·k·kᵀ
+///                                  = P − k·pjᵀ − t·kᵀ,  t = pj − s·k,
+/// two multiply-adds per entry. (t is what the gain leaves of P·h: zero
+/// for a state that learns fully, (1 − w)·pj for one whose gain is
+/// weighted by w.) Only the upper triangle is computed and mirrored: P
+/// stays exactly symmetric.
 #[inline(always)]
 fn joseph_update<T: Real, const N: usize>(p: &mut SMatrix<T, N, N>, pj: &[T; N], k: &[T; N], s: T) {
+    let t: [T; N] = core::array::from_fn(|a| pj[a] - s * k[a]);
     for a in 0..N {
-        let (ka, pja, ska) = (k[a], pj[a], s * k[a]);
         for b in a..N {
-            let v = p[(a, b)] - ka * pj[b] - pja * k[b] + ska * k[b];
+            let v = p[(a, b)] - k[a] * pj[b] - t[a] * k[b];
             p[(a, b)] = v;
             p[(b, a)] = v;
         }
