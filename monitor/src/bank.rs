@@ -447,10 +447,11 @@ impl<T: Real, const N: usize> Transition<T, N> {
     /// symmetric), and the nuisance block keeps its values.
     pub fn predict_covariance(&self, p: &mut SMatrix<T, N, N>, q: &[T; MAX_STATES]) {
         const { assert!(N <= MAX_STATES) };
-        let m = self.plant_rows_times(p);
-        for (a, row) in m.iter().enumerate() {
-            for c in NX..N {
-                set_symmetric(p, a, c, row[c]);
+        // Column c of M (plant rows only), for every column c of P.
+        let m: [[T; NX]; N] = core::array::from_fn(|c| self.plant_rows_times(p, c));
+        for (c, column) in m.iter().enumerate().skip(NX) {
+            for (a, &v) in column.iter().enumerate() {
+                set_symmetric(p, a, c, v);
             }
         }
         self.write_plant_block(p, &m);
@@ -459,25 +460,31 @@ impl<T: Real, const N: usize> Transition<T, N> {
         }
     }
 
-    /// M = Φ_plant·P, the plant rows of Φ·P. P is symmetric: column c of P
-    /// is row c.
+    /// Column c of M = Φ_plant·P: (Φ·P)[a, c] for the plant rows a. P is
+    /// symmetric, so its column c is read once for all six rows.
     #[inline(always)]
-    fn plant_rows_times(&self, p: &SMatrix<T, N, N>) -> [[T; N]; NX] {
-        let row = |r: Row| -> [T; N] { core::array::from_fn(|c| self.row_dot(r, |k| p[(k, c)])) };
-        let velocity = row(Row::Velocity);
-        let position = core::array::from_fn(|c| p[(XP, c)] + self.ratio * velocity[c]);
-        let [xv, vv, p3, p4] = Row::AFTER_MECHANICS.map(row);
-        [position, velocity, xv, vv, p3, p4]
+    fn plant_rows_times(&self, p: &SMatrix<T, N, N>, c: usize) -> [T; NX] {
+        let v = |k: usize| p[(k, c)];
+        let velocity = self.row_dot(Row::Velocity, v);
+        [
+            v(XP) + self.ratio * velocity,
+            velocity,
+            self.row_dot(Row::SpoolPosition, v),
+            self.row_dot(Row::SpoolRate, v),
+            self.row_dot(Row::P3, v),
+            self.row_dot(Row::P4, v),
+        ]
     }
 
-    /// The plant block of Φ·P·Φᵀ, (M·Φ_plantᵀ)[a, b] = Σ_k M[a][k]·Φ[b, k],
-    /// for a ≥ b, mirrored. The columns ẋ_p and x_p are formed for every
-    /// row first: column x_p is column x_p of M plus `ratio` × column ẋ_p.
+    /// The plant block of Φ·P·Φᵀ, (M·Φ_plantᵀ)[a, b] = Σ_k M[a, k]·Φ[b, k],
+    /// for a ≥ b, mirrored; `m` holds M by columns. The columns ẋ_p and
+    /// x_p are formed for every row first: column x_p is column x_p of M
+    /// plus `ratio` × column ẋ_p.
     #[inline(always)]
-    fn write_plant_block(&self, p: &mut SMatrix<T, N, N>, m: &[[T; N]; NX]) {
-        let velocity: [T; NX] = core::array::from_fn(|a| self.row_dot(Row::Velocity, |k| m[a][k]));
+    fn write_plant_block(&self, p: &mut SMatrix<T, N, N>, m: &[[T; NX]; N]) {
+        let velocity: [T; NX] = core::array::from_fn(|a| self.row_dot(Row::Velocity, |k| m[k][a]));
         for a in 0..NX {
-            set_symmetric(p, a, XP, m[a][XP] + self.ratio * velocity[a]);
+            set_symmetric(p, a, XP, m[XP][a] + self.ratio * velocity[a]);
             if a != XP {
                 set_symmetric(p, a, VP, velocity[a]);
             }
@@ -485,7 +492,7 @@ impl<T: Real, const N: usize> Transition<T, N> {
         for row in Row::AFTER_MECHANICS {
             let b = row.index();
             for a in b..NX {
-                set_symmetric(p, a, b, self.row_dot(row, |k| m[a][k]));
+                set_symmetric(p, a, b, self.row_dot(row, |k| m[k][a]));
             }
         }
     }
