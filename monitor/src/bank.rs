@@ -247,21 +247,39 @@ impl<T: Real, const N: usize> HypothesisFilter<T, N> {
             nis: T::ZERO,
             det: T::ONE,
         };
-        for (k, &j) in MEASURED.iter().enumerate() {
-            let lag = if j == XP {
-                T::ZERO
-            } else {
-                ctx.pressure_lag_s * e.f[j]
-            };
-            let r = m.r[k] + lag * lag;
-            let u = self
-                .ekf
-                .update_state_weighted(j, m.z[k], r, k as u8, &weights)?;
-            inn.innovation[k] = u.innovation;
-            inn.nis += u.innovation * u.innovation / u.variance;
-            inn.det *= u.variance;
-        }
+        // Written out per reading: each update then reads a constant
+        // column of P (the compiler specialises it).
+        self.update_one(0, ctx, m, e, &weights, &mut inn)?;
+        self.update_one(1, ctx, m, e, &weights, &mut inn)?;
+        self.update_one(2, ctx, m, e, &weights, &mut inn)?;
         Ok(inn)
+    }
+
+    /// Scalar update with reading `k` of `m`.
+    #[inline(always)]
+    fn update_one(
+        &mut self,
+        k: usize,
+        ctx: &StepContext<T>,
+        m: &Measurement<T>,
+        e: &Eval<T>,
+        weights: &[T; N],
+        inn: &mut Innovations<T>,
+    ) -> Result<(), EkfError> {
+        let j = MEASURED[k];
+        let lag = if j == XP {
+            T::ZERO
+        } else {
+            ctx.pressure_lag_s * e.f[j]
+        };
+        let r = m.r[k] + lag * lag;
+        let u = self
+            .ekf
+            .update_state_weighted(j, m.z[k], r, k as u8, weights)?;
+        inn.innovation[k] = u.innovation;
+        inn.nis += u.innovation * u.innovation / u.variance;
+        inn.det *= u.variance;
+        Ok(())
     }
 
     /// Estimate `x_i` of an optional leak state and its standard deviation
