@@ -193,24 +193,22 @@ impl<T: Real, const N: usize> HypothesisFilter<T, N> {
     }
 
     /// Predict over one step with process noise variances `q`
-    /// ([`ProcessNoise::variances`]), update with `m`, and write what the
-    /// filter did into `out` (every field; untouched on an error).
+    /// ([`ProcessNoise::variances`]) and update with `m`: what the filter
+    /// did.
     pub fn step(
         &mut self,
         plant: &Plant<T>,
         ctx: &StepContext<T>,
         q: &[T; MAX_STATES],
         m: &Measurement<T>,
-        out: &mut FilterOutput<T>,
-    ) -> Result<(), EkfError> {
+    ) -> Result<FilterOutput<T>, EkfError> {
         let e = self.predict_mean(plant, ctx);
         let phi = Transition::new(&e, ctx.step.dt, &ctx.spool_dt, self.hypothesis);
         phi.predict_covariance(&mut self.ekf.p, q);
         let inn = self.update(ctx, m, &e)?;
         // Once per step, after everything that could go wrong.
         self.ekf.check_finite()?;
-        self.write_output(ctx, &e, &inn, out);
-        Ok(())
+        Ok(self.output(ctx, &e, &inn))
     }
 
     /// Advance the plant states through the nonlinear model; returns the
@@ -290,37 +288,36 @@ impl<T: Real, const N: usize> HypothesisFilter<T, N> {
         })
     }
 
-    /// Write every field of the step's output (in place: no copies).
-    fn write_output(
-        &self,
-        ctx: &StepContext<T>,
-        e: &Eval<T>,
-        inn: &Innovations<T>,
-        out: &mut FilterOutput<T>,
-    ) {
-        out.innovation = inn.innovation;
-        out.nis = inn.nis;
-        // ln N(ν; 0, S) = −½·(νᵀS⁻¹ν + ln det S + 3·ln 2π).
-        out.log_likelihood =
-            T::c(-0.5) * (inn.nis + inn.det.ln() + T::c(3.0 * 1.837_877_066_409_345_5));
-        out.accel = (e.f[VP] * T::c(V_REF)).abs();
-        out.pressure_rate_bar_s =
-            e.f[P3].abs().max(e.f[P4].abs()) * T::c(P_REF / crate::model::BAR);
-        out.valve_flow_lpm = e.q_valve_a.abs() * T::c(crate::model::LPM_PER_M3S);
+    /// The step's output.
+    fn output(&self, ctx: &StepContext<T>, e: &Eval<T>, inn: &Innovations<T>) -> FilterOutput<T> {
         let gref = T::c(crate::model::GAIN_REF);
-        out.valve_gain = [self.ekf.x[GAIN_EXT] * gref, self.ekf.x[GAIN_RET] * gref];
-        (out.leak_internal, out.leak_internal_sd) = self.leak(self.hypothesis.internal_index());
-        (out.leak_external, out.leak_external_sd) = self.leak(self.hypothesis.external_index());
+        let (leak_internal, leak_internal_sd) = self.leak(self.hypothesis.internal_index());
+        let (leak_external, leak_external_sd) = self.leak(self.hypothesis.external_index());
         // Leak flow magnitude at the updated pressures: θ·|Δp| / 10 bar (a
         // seal leaks whichever way the pressure difference pushes; a
         // negative θ is an estimate below the healthy baseline).
         let per_10bar = T::c(P_REF / 1.0e6);
         let dp_int = (self.ekf.x[P3] - self.ekf.x[P4]).abs() * per_10bar;
         let dp_ext = (self.ekf.x[P4] - ctx.inputs.p_tank_pa / T::c(P_REF)).abs() * per_10bar;
-        out.flow_internal_lpm = out.leak_internal * dp_int;
-        out.flow_external_lpm = out.leak_external * dp_ext;
-        out.flow_internal_sd_lpm = out.leak_internal_sd * dp_int;
-        out.flow_external_sd_lpm = out.leak_external_sd * dp_ext;
+        FilterOutput {
+            innovation: inn.innovation,
+            nis: inn.nis,
+            // ln N(ν; 0, S) = −½·(νᵀS⁻¹ν + ln det S + 3·ln 2π).
+            log_likelihood: T::c(-0.5)
+                * (inn.nis + inn.det.ln() + T::c(3.0 * 1.837_877_066_409_345_5)),
+            leak_internal,
+            leak_external,
+            leak_internal_sd,
+            leak_external_sd,
+            flow_internal_lpm: leak_internal * dp_int,
+            flow_external_lpm: leak_external * dp_ext,
+            flow_internal_sd_lpm: leak_internal_sd * dp_int,
+            flow_external_sd_lpm: leak_external_sd * dp_ext,
+            valve_gain: [self.ekf.x[GAIN_EXT] * gref, self.ekf.x[GAIN_RET] * gref],
+            accel: (e.f[VP] * T::c(V_REF)).abs(),
+            pressure_rate_bar_s: e.f[P3].abs().max(e.f[P4].abs()) * T::c(P_REF / crate::model::BAR),
+            valve_flow_lpm: e.q_valve_a.abs() * T::c(crate::model::LPM_PER_M3S),
+        }
     }
 }
 
@@ -552,13 +549,16 @@ fn step_into<T: Real, const N: usize>(
     m: &Measurement<T>,
     slot: &mut Option<FilterOutput<T>>,
 ) -> Result<(), EkfError> {
-    // (The default is overwritten field by field: the output is never
-    // built elsewhere and copied.)
-    let result = filter.step(plant, ctx, q, m, slot.insert(FilterOutput::default()));
-    if result.is_err() {
-        *slot = None;
+    match filter.step(plant, ctx, q, m) {
+        Ok(out) => {
+            *slot = Some(out);
+            Ok(())
+        }
+        Err(e) => {
+            *slot = None;
+            Err(e)
+        }
     }
-    result
 }
 
 /// The four filters.
@@ -730,7 +730,7 @@ mod tests {
             r: s.r,
         };
         let q = s.noise.variances(s.ctx.step.dt);
-        f.step(&s.plant, &s.ctx, &q, &m, &mut FilterOutput::default())
+        f.step(&s.plant, &s.ctx, &q, &m).map(|_| ())
     }
 
     /// A filter of hypothesis `h` run for 200 steps: the covariance is
