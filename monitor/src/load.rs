@@ -305,7 +305,12 @@ mod tests {
                 }
             }
             let n = k as f32;
-            for u in [n, n + 0.25, n - 0.25, f32::from_bits(n.to_bits().wrapping_sub(1))] {
+            for u in [
+                n,
+                n + 0.25,
+                n - 0.25,
+                f32::from_bits(n.to_bits().wrapping_sub(1)),
+            ] {
                 if (0.0..=64.0).contains(&u) {
                     assert_eq!(to_index(u), libm::floorf(u) as usize, "f32 {u}");
                 }
