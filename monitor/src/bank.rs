@@ -245,8 +245,11 @@ impl<T: Real, const N: usize> HypothesisFilter<T, N> {
             nis: T::ZERO,
             det: T::ONE,
         };
-        // Written out per reading: each update then reads a constant
-        // column of P (the compiler specialises it).
+        // Three calls, not a loop over MEASURED: in a loop the compiler
+        // inlined the update and carried P through it on the stack; as
+        // calls, one out-of-line update per filter size loads and stores
+        // each entry once with the column and gain in registers (measured:
+        // a third fewer instructions for the updates).
         self.update_one(0, ctx, m, e, &weights, &mut inn)?;
         self.update_one(1, ctx, m, e, &weights, &mut inn)?;
         self.update_one(2, ctx, m, e, &weights, &mut inn)?;
