@@ -1,13 +1,18 @@
 //! A fixed-size extended Kalman filter core on nalgebra static matrices.
 //!
-//! The model supplies the discrete transition Jacobian Φ; measurements are
-//! direct readings of single states (H rows are unit vectors), processed
-//! one scalar at a time. For independent measurement noise this is exactly
-//! the batch update, needs no matrix inverse, and makes the innovation
-//! covariance a scalar whose failure is easy to detect. The covariance is
-//! updated in Joseph form, P ← (I − k·hᵀ)·P·(I − k·hᵀ)ᵀ + k·r·kᵀ, which stays
-//! symmetric positive semi-definite under rounding, and is re-symmetrised
-//! after every prediction.
+//! The model supplies the covariance prediction (the bank exploits the
+//! sparsity of its transition Jacobian, see `bank::Transition`);
+//! measurements are direct readings of single states (H rows are unit
+//! vectors), processed one scalar at a time. For independent measurement
+//! noise this is exactly the batch update, needs no matrix inverse, and
+//! makes the innovation covariance a scalar whose failure is easy to
+//! detect. The covariance is updated in Joseph form,
+//! P ← (I − k·hᵀ)·P·(I − k·hᵀ)ᵀ + k·r·kᵀ, which is the exact covariance of
+//! the estimator for any gain k (the bank scales gains by learning
+//! weights) and is written symmetrically, so P stays exactly symmetric.
+//!
+//! Finiteness is checked once per filter step ([`Ekf::check_finite`]), on
+//! the state and the diagonal of P only: see there why that suffices.
 
 use crate::real::Real;
 use nalgebra::{SMatrix, SVector};
@@ -32,7 +37,7 @@ pub enum EkfError {
 pub struct Ekf<T: Real, const N: usize> {
     /// State estimate.
     pub x: SVector<T, N>,
-    /// Its covariance.
+    /// Its covariance (kept exactly symmetric).
     pub p: SMatrix<T, N, N>,
 }
 
@@ -54,22 +59,6 @@ impl<T: Real, const N: usize> Ekf<T, N> {
         }
     }
 
-    /// Covariance prediction P ← Φ·P·Φᵀ + diag(q). The mean is predicted by
-    /// the caller (it integrates the nonlinear model).
-    pub fn predict_covariance(
-        &mut self,
-        phi: &SMatrix<T, N, N>,
-        q_diag: &SVector<T, N>,
-    ) -> Result<(), EkfError> {
-        let mut p = phi * self.p * phi.transpose();
-        for i in 0..N {
-            p[(i, i)] += q_diag[i];
-        }
-        symmetrise(&mut p);
-        self.p = p;
-        self.check()
-    }
-
     /// Update with a direct reading `z` of state `j` with noise variance
     /// `r`, in Joseph form. `index` names the measurement in errors.
     pub fn update_state(
@@ -79,7 +68,7 @@ impl<T: Real, const N: usize> Ekf<T, N> {
         r: T,
         index: u8,
     ) -> Result<ScalarUpdate<T>, EkfError> {
-        self.update_state_weighted(j, z, r, index, &SVector::repeat(T::ONE))
+        self.update_state_weighted(j, z, r, index, &[T::ONE; N])
     }
 
     /// As [`Self::update_state`], with the gain of each state scaled by its
@@ -87,45 +76,59 @@ impl<T: Real, const N: usize> Ekf<T, N> {
     /// parameters do not learn from samples the model is known to describe
     /// poorly). The Joseph form gives the exact covariance of the estimator
     /// for any gain, so P stays consistent with what the filter does.
+    ///
+    /// Fails only on the innovation variance; a non-finite state or
+    /// covariance is left for [`Self::check_finite`] at the end of the
+    /// filter step (a non-finite P_jj is reported as
+    /// [`EkfError::NonFinite`] here already, being the cause).
     pub fn update_state_weighted(
         &mut self,
         j: usize,
         z: T,
         r: T,
         index: u8,
-        weights: &SVector<T, N>,
+        weights: &[T; N],
     ) -> Result<ScalarUpdate<T>, EkfError> {
         let s = self.p[(j, j)] + r;
-        if !(s.is_finite() && s > T::ZERO) {
-            return Err(EkfError::InnovationCovariance { index });
+        if !(s > T::ZERO && finite(s)) {
+            return Err(if self.p[(j, j)].is_finite() {
+                EkfError::InnovationCovariance { index }
+            } else {
+                EkfError::NonFinite
+            });
         }
         let nu = z - self.x[j];
         let inv_s = T::ONE / s;
-        let pj: SVector<T, N> = self.p.column(j).into_owned();
-        let mut k: SVector<T, N> = pj * inv_s;
-        for i in 0..N {
-            k[i] *= weights[i];
+        // Column j of P before the update (= P·h) and the weighted gain.
+        let pj: [T; N] = core::array::from_fn(|i| self.p[(i, j)]);
+        let k: [T; N] = core::array::from_fn(|i| pj[i] * inv_s * weights[i]);
+        for (xi, ki) in self.x.iter_mut().zip(&k) {
+            *xi += *ki * nu;
         }
-        self.x += k * nu;
-        // Joseph form with h = e_j, elementwise (valid for any gain k):
-        // P_ab − k_a·P_jb − P_aj·k_b + s·k_a·k_b.
-        for a in 0..N {
-            for b in a..N {
-                let v = self.p[(a, b)] - k[a] * pj[b] - pj[a] * k[b] + s * k[a] * k[b];
-                self.p[(a, b)] = v;
-                self.p[(b, a)] = v;
-            }
-        }
-        self.check()?;
+        joseph_update(&mut self.p, &pj, &k, s);
         Ok(ScalarUpdate {
             innovation: nu,
             variance: s,
         })
     }
 
-    /// Every entry finite.
-    fn check(&self) -> Result<(), EkfError> {
-        if self.x.iter().all(|v| v.is_finite()) && self.p.iter().all(|v| v.is_finite()) {
+    /// The state and the covariance are finite.
+    ///
+    /// Only x and the diagonal of P are scanned, once per filter step
+    /// after its updates: a non-finite off-diagonal P_ab reaches the
+    /// diagonal or the state within one step. The prediction forms every
+    /// diagonal entry of a plant row from all the covariances of that
+    /// row's non-zero columns, and the p4 row of Φ reaches every state but
+    /// ẋ_v (so any pair without ẋ_v hits P_p4p4); a non-finite P(ẋ_v, b)
+    /// moves into the p4 column in the prediction, which the p4 reading's
+    /// update then spreads into the gain, the state and the diagonal. A
+    /// non-finite Φ entry or noise lands on the diagonal directly.
+    pub fn check_finite(&self) -> Result<(), EkfError> {
+        if all_finite(
+            (0..N)
+                .map(|i| self.x[i])
+                .chain((0..N).map(|i| self.p[(i, i)])),
+        ) {
             Ok(())
         } else {
             Err(EkfError::NonFinite)
@@ -143,15 +146,110 @@ impl<T: Real, const N: usize> Ekf<T, N> {
     }
 }
 
-/// P ← (P + Pᵀ)/2.
-fn symmetrise<T: Real, const N: usize>(p: &mut SMatrix<T, N, N>) {
-    let half = T::c(0.5);
+/// Joseph-form covariance update for a reading of state j (h = e_j), gain
+/// `k`, innovation variance `s` = P_jj + r and `pj` = P·e_j before the
+/// update. Elementwise, valid for any gain:
+/// (I − k·hᵀ)·P·(I − k·hᵀ)ᵀ + k·r·kᵀ = P − k·pjᵀ − pj·kᵀ + s·k·kᵀ
+///                                  = P − k·pjᵀ − t·kᵀ,  t = pj − s·k,
+/// two multiply-adds per entry. (t is what the gain leaves of P·h: zero
+/// for a state that learns fully, (1 − w)·pj for one whose gain is
+/// weighted by w.) Only the upper triangle is computed and mirrored: P
+/// stays exactly symmetric.
+#[inline(always)]
+fn joseph_update<T: Real, const N: usize>(p: &mut SMatrix<T, N, N>, pj: &[T; N], k: &[T; N], s: T) {
+    let t: [T; N] = core::array::from_fn(|a| pj[a] - s * k[a]);
     for a in 0..N {
-        for b in a + 1..N {
-            let v = (p[(a, b)] + p[(b, a)]) * half;
+        for b in a..N {
+            let v = p[(a, b)] - k[a] * pj[b] - t[a] * k[b];
             p[(a, b)] = v;
             p[(b, a)] = v;
         }
+    }
+}
+
+/// Every value is finite: v·0 is ±0 for a finite v and NaN for ±∞ or
+/// NaN, and a sum of zeros stays zero while any NaN makes it NaN.
+/// Branch-free, two FPU operations per value, exact (no overflow can fake
+/// a failure).
+#[inline(always)]
+fn all_finite<T: Real>(values: impl Iterator<Item = T>) -> bool {
+    values.fold(T::ZERO, |acc, v| acc + v * T::ZERO) == T::ZERO
+}
+
+/// `v` is finite, tested on the FPU (v·0 is ±0 unless v is ±∞ or NaN):
+/// `is_finite` compiles to a dozen integer instructions on the Cortex-M4F.
+#[inline(always)]
+fn finite<T: Real>(v: T) -> bool {
+    v * T::ZERO == T::ZERO
+}
+
+/// The dense reference the optimised code is tested against: the plain
+/// covariance prediction P ← Φ·P·Φᵀ + diag(q), then re-symmetrised.
+#[cfg(test)]
+pub(crate) fn predict_covariance_dense<T: Real, const N: usize>(
+    p: &mut SMatrix<T, N, N>,
+    phi: &SMatrix<T, N, N>,
+    q_diag: &[T; N],
+) {
+    let mut next = phi * *p * phi.transpose();
+    for i in 0..N {
+        next[(i, i)] += q_diag[i];
+    }
+    let half = T::c(0.5);
+    for a in 0..N {
+        for b in a + 1..N {
+            let v = (next[(a, b)] + next[(b, a)]) * half;
+            next[(a, b)] = v;
+            next[(b, a)] = v;
+        }
+    }
+    *p = next;
+}
+
+/// The dense reference of the weighted Joseph update: the matrix products
+/// (I − k·hᵀ)·P·(I − k·hᵀ)ᵀ + k·r·kᵀ written out with nalgebra.
+#[cfg(test)]
+pub(crate) fn joseph_update_dense<T: Real, const N: usize>(
+    f: &mut Ekf<T, N>,
+    j: usize,
+    z: T,
+    r: T,
+    weights: &[T; N],
+) {
+    let s = f.p[(j, j)] + r;
+    let mut k: SVector<T, N> = f.p.column(j) / s;
+    for i in 0..N {
+        k[i] *= weights[i];
+    }
+    let mut h = SVector::<T, N>::zeros();
+    h[j] = T::ONE;
+    let a = SMatrix::<T, N, N>::identity() - k * h.transpose();
+    f.x += k * (z - f.x[j]);
+    f.p = a * f.p * a.transpose() + k * k.transpose() * r;
+}
+
+/// A small deterministic generator for the tests (xorshift64), values in
+/// [−0.5, 0.5).
+#[cfg(test)]
+pub(crate) struct TestRng(pub u64);
+
+#[cfg(test)]
+impl TestRng {
+    pub(crate) fn next(&mut self) -> f64 {
+        let s = &mut self.0;
+        *s ^= *s << 13;
+        *s ^= *s >> 7;
+        *s ^= *s << 17;
+        (*s >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+    }
+
+    /// A random symmetric positive definite matrix A·Aᵀ + 0.01·I with
+    /// entries of mixed scale (states of different units), rounded to T.
+    pub(crate) fn spd<T: Real, const N: usize>(&mut self) -> SMatrix<T, N, N> {
+        let scale: [f64; N] = core::array::from_fn(|_| libm::exp(4.0 * self.next()));
+        let a = SMatrix::<f64, N, N>::from_fn(|i, _| self.next() * scale[i]);
+        let p = a * a.transpose() + SMatrix::<f64, N, N>::identity() * 0.01;
+        p.map(T::c)
     }
 }
 
@@ -189,7 +287,7 @@ mod tests {
             x: Vector2::new(0.0, 0.0),
             p: p0,
         };
-        f.update_state_weighted(0, 1.0, 0.5, 0, &Vector2::new(1.0, 0.0))
+        f.update_state_weighted(0, 1.0, 0.5, 0, &[1.0, 0.0])
             .unwrap();
         assert_eq!(f.x[1], 0.0);
         let k = Vector2::new(2.0 / 2.5, 0.0);
@@ -212,8 +310,89 @@ mod tests {
             f.update_state(1, 1.0, f32::NAN, 1),
             Err(EkfError::InnovationCovariance { index: 1 })
         );
-        let err = f.update_state(0, f32::INFINITY, 1.0, 2);
-        assert_eq!(err, Err(EkfError::NonFinite));
+        // An infinite reading makes the state non-finite: the step's check
+        // reports it.
+        assert!(f.update_state(0, f32::INFINITY, 1.0, 2).is_ok());
+        assert_eq!(f.check_finite(), Err(EkfError::NonFinite));
+        // A covariance that is already non-finite is the cause, and named so.
+        let mut g = Ekf::<f32, 2>::new(Vector2::new(0.0, 0.0), &Vector2::new(f32::NAN, 1.0));
+        assert_eq!(g.update_state(0, 1.0, 1.0, 0), Err(EkfError::NonFinite));
+    }
+
+    #[test]
+    fn the_finiteness_tests_agree_with_is_finite() {
+        for v in [
+            0.0f32,
+            -0.0,
+            1.0,
+            -3.5e-40,
+            f32::MIN_POSITIVE,
+            f32::MAX,
+            f32::MIN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+        ] {
+            assert_eq!(finite(v), v.is_finite(), "{v}");
+            assert_eq!(finite(v as f64), v.is_finite(), "{v}");
+            assert_eq!(all_finite([1.0, v, 2.0].into_iter()), v.is_finite(), "{v}");
+        }
+    }
+
+    #[test]
+    fn the_finiteness_check_sees_the_state_and_the_diagonal() {
+        let ok = Ekf::<f32, 3>::new(Vector2::new(0.0, 0.0).push(1.0), &SVector::repeat(2.0));
+        assert_eq!(ok.check_finite(), Ok(()));
+        for bad in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
+            for i in 0..3 {
+                let mut f = ok.clone();
+                f.x[i] = bad;
+                assert_eq!(f.check_finite(), Err(EkfError::NonFinite));
+                let mut f = ok.clone();
+                f.p[(i, i)] = bad;
+                assert_eq!(f.check_finite(), Err(EkfError::NonFinite));
+            }
+        }
+        // Huge but finite values are not failures (no overflow in the test).
+        let mut f = ok.clone();
+        f.x[0] = f32::MAX;
+        f.x[1] = f32::MAX;
+        f.p[(2, 2)] = f32::MAX;
+        assert_eq!(f.check_finite(), Ok(()));
+    }
+
+    /// The optimised update against the matrix form, on random SPD
+    /// covariances, partial weights and each measured state.
+    fn joseph_update_matches_the_dense_matrix_form<T: Real>(tol: f64) {
+        let mut rng = TestRng(0x2545_f491_4f6c_dd1d);
+        for trial in 0..200 {
+            let p = rng.spd::<T, 11>();
+            let x = SVector::<T, 11>::from_fn(|_, _| T::c(rng.next()));
+            let w: [T; 11] =
+                core::array::from_fn(|i| T::c(if i < 6 { 1.0 } else { rng.next() + 0.5 }));
+            let j = [0, 4, 5][trial % 3];
+            let (z, r) = (T::c(rng.next()), T::c(1e-4 + rng.next().abs()));
+            let mut fast = Ekf { x, p };
+            let mut slow = fast.clone();
+            fast.update_state_weighted(j, z, r, 0, &w).unwrap();
+            joseph_update_dense(&mut slow, j, z, r, &w);
+            let scale = p.iter().fold(0.0f64, |m, v| m.max(v.abs().to_f64()));
+            for i in 0..11 {
+                let d = (fast.x[i] - slow.x[i]).abs().to_f64();
+                assert!(d <= tol * (1.0 + slow.x[i].abs().to_f64()), "x[{i}]");
+                for k in 0..11 {
+                    let d = (fast.p[(i, k)] - slow.p[(i, k)]).abs().to_f64();
+                    assert!(d <= tol * scale, "P[{i}, {k}]: {d:e}");
+                }
+            }
+            assert_eq!(fast.p, fast.p.transpose());
+        }
+    }
+
+    #[test]
+    fn joseph_update_equals_the_dense_matrix_form() {
+        joseph_update_matches_the_dense_matrix_form::<f64>(1e-13);
+        joseph_update_matches_the_dense_matrix_form::<f32>(4e-6);
     }
 
     #[test]
@@ -226,11 +405,7 @@ mod tests {
         };
         for _ in 0..1000 {
             f.update_state(0, 0.0, 1e-9, 0).unwrap();
-            f.predict_covariance(
-                &Matrix2::new(1.0, 1e-3, 0.0, 1.0),
-                &Vector2::new(1e-9, 1e-9),
-            )
-            .unwrap();
+            predict_covariance_dense(&mut f.p, &Matrix2::new(1.0, 1e-3, 0.0, 1.0), &[1e-9, 1e-9]);
         }
         assert_eq!(f.p[(0, 1)], f.p[(1, 0)]);
         assert!(f.p[(0, 0)] >= 0.0 && f.p[(1, 1)] >= 0.0);

@@ -65,22 +65,31 @@ impl<T: Real> BulkModulusTable<T> {
         }
     }
 
+    /// The interval of `p` ∈ [p_node[0], p_node[64]]: the largest i ≤ 63
+    /// with p_node[i] ≤ p. Binary search in six fixed halving steps
+    /// (32, 16, …, 1), each a compare and a conditional add that the
+    /// compiler unrolls without branches: no roots, and about half the
+    /// instructions of a loop that narrows [lo, hi].
+    #[inline(always)]
+    fn interval(&self, p: T) -> usize {
+        const { assert!(INTERVALS.is_power_of_two()) };
+        let mut lo = 0;
+        let mut half = INTERVALS / 2;
+        while half > 0 {
+            if p >= self.p_node[lo + half] {
+                lo += half;
+            }
+            half /= 2;
+        }
+        lo
+    }
+
     /// Bulk modulus (Pa) and its derivative dβ/dp (1) at gauge pressure
     /// `p_gauge_pa` (clamped to the table).
     #[inline]
     pub fn at(&self, p_gauge_pa: T) -> (T, T) {
         let p = p_gauge_pa.clamp_to(self.p_node[0], self.p_node[INTERVALS]);
-        // Binary search for the interval: six comparisons, no roots.
-        let (mut lo, mut hi) = (0usize, INTERVALS);
-        while hi - lo > 1 {
-            let mid = (lo + hi) / 2;
-            if p >= self.p_node[mid] {
-                lo = mid;
-            } else {
-                hi = mid;
-            }
-        }
-        let i = lo;
+        let i = self.interval(p);
         let s = self.slope[i];
         (self.beta[i] + s * (p - self.p_node[i]), s)
     }
@@ -134,6 +143,21 @@ mod tests {
                     "air {air} p {p}: {b} vs {exact}"
                 );
                 p += 0.37 * BAR;
+            }
+        }
+    }
+
+    #[test]
+    fn interval_is_the_one_a_plain_search_finds() {
+        let tab = BulkModulusTable::<f32>::new(&Fluid::NOMINAL);
+        let plain = |p: f32| (0..INTERVALS).rev().find(|&i| p >= tab.p_node[i]).unwrap();
+        for i in 0..=INTERVALS {
+            let node = tab.p_node[i];
+            let below = f32::from_bits(node.to_bits() - 1);
+            let above = f32::from_bits(node.to_bits() + 1);
+            for p in [below, node, above] {
+                let p = p.clamp_to(tab.p_node[0], tab.p_node[INTERVALS]);
+                assert_eq!(tab.interval(p), plain(p), "node {i}, p {p}");
             }
         }
     }

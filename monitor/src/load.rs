@@ -175,7 +175,7 @@ impl<T: Real> LoadTable<T> {
         if i >= LOAD_TABLE_INTERVALS {
             i = LOAD_TABLE_INTERVALS - 1;
         }
-        let frac = u - T::c(i as f64);
+        let frac = u - T::from_f32(i as f32);
         let lerp = |tab: &[T; NODES]| {
             let slope = tab[i + 1] - tab[i];
             (tab[i] + slope * frac, slope * self.inv_dx)
@@ -194,10 +194,18 @@ impl<T: Real> LoadTable<T> {
     }
 }
 
+/// ⌊u⌋ for u ∈ [0, 64], without f64 (software arithmetic on the MCU):
+/// the cast truncates an f32 in one instruction. For T = f64, rounding u
+/// to f32 can carry it up to the next integer, never below ⌊u⌋: step back
+/// then.
 #[inline(always)]
 fn to_index<T: Real>(u: T) -> usize {
-    // u ∈ [0, 64]: f64 conversion is exact and the cast truncates.
-    u.to_f64() as usize
+    let i = u.to_f32() as usize;
+    if T::from_f32(i as f32) > u {
+        i - 1
+    } else {
+        i
+    }
 }
 
 #[cfg(test)]
@@ -285,6 +293,29 @@ mod tests {
         }
         let e1 = energy(x, v);
         assert!((e1 - e0).abs() < 1e-6 * e0.abs().max(1.0), "{e0} -> {e1}");
+    }
+
+    #[test]
+    fn index_is_the_floor_in_either_precision() {
+        for k in 0..=64u32 {
+            let n = k as f64;
+            for u in [n, n + 1e-12, n - 1e-12, n + 0.5, n - 0.5] {
+                if (0.0..=64.0).contains(&u) {
+                    assert_eq!(to_index(u), libm::floor(u) as usize, "f64 {u}");
+                }
+            }
+            let n = k as f32;
+            for u in [
+                n,
+                n + 0.25,
+                n - 0.25,
+                f32::from_bits(n.to_bits().wrapping_sub(1)),
+            ] {
+                if (0.0..=64.0).contains(&u) {
+                    assert_eq!(to_index(u), libm::floorf(u) as usize, "f32 {u}");
+                }
+            }
+        }
     }
 
     #[test]

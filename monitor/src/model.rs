@@ -280,7 +280,7 @@ impl<T: Real> Plant<T> {
     }
 
     /// Evaluate the model at scaled state `s`.
-    #[inline]
+    #[inline(always)]
     pub fn eval(&self, s: &[T; NX], u: &Inputs<T>, nuis: Nuisance<T>, leaks: Leaks<T>) -> Eval<T> {
         let x_ref = T::c(X_REF);
         let v_ref = T::c(V_REF);
@@ -477,7 +477,7 @@ impl<T: Real> Plant<T> {
         a
     }
 
-    /// Advance the scaled state `s` by `dt` seconds in `n` substeps with
+    /// Advance the scaled state `s` by `dt` seconds in `n` ≥ 1 substeps with
     /// inputs held: the spool by its exact-in-steady-state trapezoidal map,
     /// velocity and pressures by linearly implicit Euler on their own
     /// (stiff) diagonal, velocity before position (symplectic), pressures
@@ -492,29 +492,36 @@ impl<T: Real> Plant<T> {
         leaks: Leaks<T>,
         step: &Step<T>,
     ) -> Eval<T> {
-        let (n, spool) = (step.substeps, &step.spool);
-        let h = step.dt / T::c(n as f64);
+        // (A small integer: exact in f32, and no software f64 on the MCU.)
+        let h = step.dt / T::from_f32(step.substeps as f32);
         let cmd = self.spool_command(u.u_valve);
-        let mut first = Eval::default();
-        for k in 0..n {
+        // The first substep is peeled off: only its evaluation is returned,
+        // so in the later ones the compiler drops the Jacobian entries the
+        // substep itself does not use (`eval` is inlined into both).
+        let first = self.eval(s, u, nuis, leaks);
+        self.substep(s, &first, h, cmd, &step.spool);
+        for _ in 1..step.substeps {
             let e = self.eval(s, u, nuis, leaks);
-            if k == 0 {
-                first = e;
-            }
-            let j = &e.jac;
-            let [xv, vv] = spool.apply([s[XV], s[VV]], cmd);
-            let dxv = xv - s[XV];
-            s[XV] = xv;
-            s[VV] = vv;
-            let dv = h * e.f[VP] / (T::ONE - h * stiff(j.v_v));
-            s[VP] += dv;
-            s[XP] += h * s[VP] * T::c(V_REF / X_REF);
-            let f3 = e.f[P3] + j.p3_v * dv + j.p3_xv * dxv;
-            let f4 = e.f[P4] + j.p4_v * dv + j.p4_xv * dxv;
-            s[P3] += h * f3 / (T::ONE - h * stiff(j.p3_p3));
-            s[P4] += h * f4 / (T::ONE - h * stiff(j.p4_p4));
+            self.substep(s, &e, h, cmd, &step.spool);
         }
         first
+    }
+
+    /// One substep of `h` seconds from the model `e` evaluated at `s`.
+    #[inline(always)]
+    fn substep(&self, s: &mut [T; NX], e: &Eval<T>, h: T, cmd: T, spool: &SpoolStep<T>) {
+        let j = &e.jac;
+        let [xv, vv] = spool.apply([s[XV], s[VV]], cmd);
+        let dxv = xv - s[XV];
+        s[XV] = xv;
+        s[VV] = vv;
+        let dv = h * e.f[VP] / (T::ONE - h * stiff(j.v_v));
+        s[VP] += dv;
+        s[XP] += h * s[VP] * T::c(V_REF / X_REF);
+        let f3 = e.f[P3] + j.p3_v * dv + j.p3_xv * dxv;
+        let f4 = e.f[P4] + j.p4_v * dv + j.p4_xv * dxv;
+        s[P3] += h * f3 / (T::ONE - h * stiff(j.p3_p3));
+        s[P4] += h * f4 / (T::ONE - h * stiff(j.p4_p4));
     }
 }
 

@@ -2,7 +2,7 @@
 //! status. Deterministic: the same samples give the same statuses, bit for
 //! bit, on any IEEE-754 machine (see `real.rs`).
 
-use crate::bank::{Bank, FilterOutput, Measurement, ProcessNoise, StepContext, NB, NZ};
+use crate::bank::{Bank, BankOutput, Measurement, ProcessNoise, StepContext, NB, NZ};
 use crate::decision::Decision;
 use crate::ekf::EkfError;
 use crate::fluid::laminar_flow_factor;
@@ -18,6 +18,8 @@ use crate::valve::SpoolStep;
 
 /// A step longer than this many nominal periods is a data gap.
 pub const GAP_PERIODS: f64 = 5.0;
+/// Relative change of the step length that recomputes the spool maps.
+const SPOOL_DT_TOLERANCE: f64 = 1e-6;
 
 /// Derived per-installation constants.
 #[derive(Clone, Debug)]
@@ -28,6 +30,8 @@ struct Config<T> {
     leak_prior_sd: T,
     substeps: u32,
     period_s: f64,
+    /// GAP_PERIODS · period_s: a longer step is a data gap.
+    gap_s: f64,
     pressure_lag_s: T,
     warm_up_s: f64,
 }
@@ -41,6 +45,8 @@ pub struct Monitor<T: Real = f32> {
     bank: Option<Bank<T>>,
     last_t: Option<f64>,
     spool_dt_s: f64,
+    /// 1e-6 · spool_dt_s: a step that differs more needs new spool maps.
+    spool_dt_tol_s: f64,
     spool_sub: SpoolStep<T>,
     spool_dt: SpoolStep<T>,
     since_start_s: f64,
@@ -95,6 +101,7 @@ impl<T: Real> Monitor<T> {
             leak_prior_sd: T::c(f.leak_prior_lpm),
             substeps: f.substeps,
             period_s: f.sample_period_s,
+            gap_s: GAP_PERIODS * f.sample_period_s,
             pressure_lag_s: T::c(params.sensors.pressure_lag_s),
             warm_up_s: f.warm_up_s,
         };
@@ -103,6 +110,7 @@ impl<T: Real> Monitor<T> {
             spool_sub: plant.spool_step(period / f.substeps as f64),
             spool_dt: plant.spool_step(period),
             spool_dt_s: period,
+            spool_dt_tol_s: SPOOL_DT_TOLERANCE * period,
             plant,
             cfg,
             checker: SampleChecker::new(params),
@@ -145,7 +153,7 @@ impl<T: Real> Monitor<T> {
             None => self.cfg.period_s,
         };
         self.last_t = Some(sample.t_s);
-        if dt > GAP_PERIODS * self.cfg.period_s && self.bank.is_some() {
+        if dt > self.cfg.gap_s && self.bank.is_some() {
             self.bank = None;
             self.held = None;
             flags |= health::DATA_GAP;
@@ -190,8 +198,9 @@ impl<T: Real> Monitor<T> {
             );
         };
 
-        if (dt - self.spool_dt_s).abs() > 1e-6 * self.spool_dt_s {
+        if (dt - self.spool_dt_s).abs() > self.spool_dt_tol_s {
             self.spool_dt_s = dt;
+            self.spool_dt_tol_s = SPOOL_DT_TOLERANCE * dt;
             self.spool_dt = self.plant.spool_step(dt);
             self.spool_sub = self.plant.spool_step(dt / self.cfg.substeps as f64);
         }
@@ -212,11 +221,11 @@ impl<T: Real> Monitor<T> {
             learning: self.quiet.weight(),
             gain_learning: self.quiet.gain_weight(),
         };
-        let outputs = bank.step(&self.plant, &ctx, &self.cfg.noise, &m);
-        let mut ok: [Option<FilterOutput<T>>; 4] = [None; 4];
-        for (i, out) in outputs.into_iter().enumerate() {
-            match out {
-                Ok(o) => ok[i] = Some(o),
+        let mut ok: BankOutput<T> = [None; 4];
+        let results = bank.step(&self.plant, &ctx, &self.cfg.noise, &m, &mut ok);
+        for (i, result) in results.into_iter().enumerate() {
+            match result {
+                Ok(()) => {}
                 Err(EkfError::InnovationCovariance { .. }) | Err(EkfError::NonFinite) => {
                     let h = Hypothesis::ALL[i];
                     // Restart the failed filter from the healthy filter's
