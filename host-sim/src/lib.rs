@@ -9,6 +9,7 @@ pub mod calibrate;
 pub mod decode;
 pub mod eval;
 pub mod golden;
+pub mod plot;
 pub mod recording;
 pub mod replay;
 pub mod sim;

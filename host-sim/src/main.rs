@@ -48,6 +48,19 @@ enum Command {
         #[arg(long)]
         f64: bool,
     },
+    /// Plot a recording and the monitor's view of it (SVG): pressures,
+    /// motion, leak estimates against the alarm levels, probabilities.
+    Plot {
+        /// Recording (CSV per `recording-csv.md`, optionally gzipped).
+        recording: PathBuf,
+        /// Output SVG [default: the recording's name with `.svg`, in the
+        /// current directory].
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+        /// Installation parameters (TOML, e.g. from `calibrate`).
+        #[arg(long)]
+        params: Option<PathBuf>,
+    },
     /// Fit an installation's parameters from a leak-free recording of it.
     Calibrate {
         /// A recording of the installation known to be healthy (a minute or
@@ -336,6 +349,20 @@ fn replay_one(
     Ok(())
 }
 
+/// `run.csv.gz` → `run.svg` in the current directory.
+fn default_plot_path(recording: &std::path::Path) -> PathBuf {
+    let name = recording
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "recording".into());
+    let stem = name
+        .strip_suffix(".gz")
+        .unwrap_or(&name)
+        .trim_end_matches(".csv")
+        .to_string();
+    PathBuf::from(format!("{stem}.svg"))
+}
+
 /// Decode a candump log; the summary goes to stderr.
 fn decode(log: &std::path::Path, json: bool, strict: bool) -> Result<ExitCode> {
     let name = log.display().to_string();
@@ -381,6 +408,29 @@ fn run(cli: Cli) -> Result<ExitCode> {
                 }
                 replay_one(recording, &params, json, trace.as_deref(), trace_every, f64)?;
             }
+            Ok(ExitCode::SUCCESS)
+        }
+        Command::Plot {
+            recording,
+            output,
+            params,
+        } => {
+            let params = match &params {
+                Some(p) => host_sim::load_params(p)?,
+                None => Params::nominal(),
+            };
+            let output = output.unwrap_or_else(|| default_plot_path(&recording));
+            let reader = RecordingReader::open(&recording)?;
+            let mut obs = host_sim::plot::PlotObserver::new(host_sim::plot::MAX_POINTS);
+            let name = recording.display().to_string();
+            let summary = replay::<f32, _>(reader, &name, &params, &mut obs)?;
+            host_sim::plot::write_svg(&output, &summary, &obs, &params)?;
+            println!(
+                "{}: verdict {}; plot written to {}",
+                name,
+                summary.verdict,
+                output.display()
+            );
             Ok(ExitCode::SUCCESS)
         }
         Command::Calibrate {
@@ -503,11 +553,20 @@ fn run(cli: Cli) -> Result<ExitCode> {
                 threads,
             };
             let start = std::time::Instant::now();
-            let progress = |d: usize, n: usize| {
-                eprint!("\r{d}/{n} runs");
-            };
+            // Drawn on a terminal only; logs get the one summary line below.
+            let bar = indicatif::ProgressBar::new(cases.len() as u64).with_style(
+                indicatif::ProgressStyle::with_template(
+                    "{bar:40} {pos}/{len} runs, {elapsed} (about {eta} left)",
+                )?,
+            );
+            let progress = |d: usize, _n: usize| bar.set_position(d as u64);
             let results = eval::run_all(&cases, &cfg, &progress)?;
-            eprintln!(" in {:.0} s", start.elapsed().as_secs_f64());
+            bar.finish_and_clear();
+            eprintln!(
+                "{} runs in {:.0} s",
+                results.len(),
+                start.elapsed().as_secs_f64()
+            );
             if let Some(path) = out {
                 let mut f = std::io::BufWriter::new(std::fs::File::create(&path)?);
                 for r in &results {

@@ -265,3 +265,55 @@ fn calibrate_refuses_a_recording_without_moves() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("still.csv") && err.contains("moves"), "{err}");
 }
+
+#[test]
+fn plot_of_a_leak_recording_shows_the_verdict_and_the_alarm() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/internal.csv.gz");
+    let svg = dir.path().join("internal.svg");
+    let out = host_sim(&["plot", rec.to_str().unwrap(), "-o", svg.to_str().unwrap()]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = std::fs::read_to_string(&svg).unwrap();
+    assert!(text.trim_start().starts_with("<svg"), "not an SVG");
+    for s in [
+        "verdict internal",
+        "alarm internal",
+        "Leak flow estimates",
+        "alarm level",
+        "warm-up",
+    ] {
+        assert!(text.contains(s), "plot lacks `{s}`");
+    }
+    // Every panel draws its series: 4 pressures, position, command, 4 leak
+    // curves, 5 probability/weight curves, the two levels' legend lines.
+    let lines = text.matches("<polyline").count();
+    assert!(lines >= 15, "only {lines} polylines");
+    // Decimated: 18 000 samples do not become megabytes.
+    assert!(text.len() < 2_000_000, "{} bytes", text.len());
+}
+
+#[test]
+fn plot_of_a_malformed_recording_is_an_error_and_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = write(
+        dir.path(),
+        "bad.csv",
+        &format!("{HEADER}{ROW0}0.001,50.0,nan,12.9,0.8,0.0412,0.0\n"),
+    );
+    let svg = dir.path().join("bad.svg");
+    let out = host_sim(&["plot", p.to_str().unwrap(), "-o", svg.to_str().unwrap()]);
+    assert!(!out.status.success(), "malformed recording plotted");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("bad.csv:3:"),
+        "error does not name the line: {err}"
+    );
+    assert!(
+        !svg.exists(),
+        "an SVG was written for a malformed recording"
+    );
+}
