@@ -76,6 +76,50 @@ fn a_missing_reading_is_a_sensor_fault_never_healthy_nor_a_leak() {
 }
 
 #[test]
+fn a_frozen_reading_is_a_sensor_fault_never_healthy_nor_a_leak() {
+    // A logger or transmitter that repeats its last value: each channel
+    // frozen from 20 s to the end of a healthy 60 s run. Unchecked, a
+    // frozen position reads as a leak (the oil goes somewhere) and a frozen
+    // pressure as "healthy".
+    let clean = samples(0.0, 0.0, 36);
+    let frozen_from = 20_000;
+    for ch in [
+        monitor::Channel::XPiston,
+        monitor::Channel::PPiston,
+        monitor::Channel::PRod,
+    ] {
+        let mut s = clean.clone();
+        let held = s[frozen_from];
+        for x in &mut s[frozen_from..] {
+            match ch {
+                monitor::Channel::XPiston => x.x_piston_m = held.x_piston_m,
+                monitor::Channel::PPiston => x.p_piston_bar = held.p_piston_bar,
+                _ => x.p_rod_bar = held.p_rod_bar,
+            }
+        }
+        let st = replay::<f32>(&s);
+        let at = st
+            .iter()
+            .position(|x| x.events.contains(&Event::SensorFault(ch)))
+            .unwrap_or_else(|| panic!("{ch:?} frozen but never faulted"));
+        let delay = st[at].t_s - s[frozen_from].t_s;
+        assert!(delay <= 3.0, "{ch:?} faulted {delay:.3} s after it froze");
+        assert!(
+            st[at..].iter().all(|x| x.verdict == Verdict::SensorFault),
+            "{ch:?}: verdict left sensor fault while frozen"
+        );
+        assert!(
+            st.iter().all(|x| !x.verdict.is_leak()),
+            "{ch:?} frozen reported as a leak"
+        );
+    }
+    // The same run unfrozen: no fault at all.
+    assert!(replay::<f32>(&clean)
+        .iter()
+        .all(|x| x.faulted_channels == 0));
+}
+
+#[test]
 fn a_sensor_fault_takes_precedence_over_a_latched_alarm() {
     let mut s = samples(0.5, 0.0, 34);
     let n = s.len();

@@ -173,6 +173,7 @@ impl<T: Real> Monitor<T> {
             );
         };
         self.update_temperature(c.temp_oil_c);
+        let suspect = checked.suspect != 0;
 
         let m = self.measurement(&c);
         // The command (and the port pressures) read at the previous sample
@@ -218,8 +219,17 @@ impl<T: Real> Monitor<T> {
             },
             spool_dt: self.spool_dt,
             pressure_lag_s: self.cfg.pressure_lag_s,
-            learning: self.quiet.weight(),
-            gain_learning: self.quiet.gain_weight(),
+            // A possibly frozen reading teaches the leak states nothing.
+            learning: if suspect {
+                T::ZERO
+            } else {
+                self.quiet.weight()
+            },
+            gain_learning: if suspect {
+                T::ZERO
+            } else {
+                self.quiet.gain_weight()
+            },
         };
         let mut ok: BankOutput<T> = [None; 4];
         let results = bank.step(&self.plant, &ctx, &self.cfg.noise, &m, &mut ok);
@@ -257,7 +267,7 @@ impl<T: Real> Monitor<T> {
             &ok,
             T::c(dt),
             self.quiet.weight(),
-            !warming && flags & health::FILTER_RESET == 0,
+            !warming && !suspect && flags & health::FILTER_RESET == 0,
             &mut events,
         );
         self.status(sample.t_s, checked.faulted, flags, events)

@@ -1,8 +1,9 @@
 //! Signal conditioning: sensor offsets, plausibility ranges and fault
 //! tracking for one sample in engineering units.
 //!
-//! A reading that is missing (the acquisition marked it invalid) or outside
-//! its plausible range faults its channel: the monitor then reports a sensor
+//! A reading that is missing (the acquisition marked it invalid), outside
+//! its plausible range, or frozen while the plant moves ([`frozen`]) faults
+//! its channel: the monitor then reports a sensor
 //! fault, never a leak and never "healthy". The oil temperature is optional:
 //! its fault is reported but does not stop the estimation.
 
@@ -42,6 +43,8 @@ pub struct Checked {
     pub values: Option<Conditioned>,
     /// Faulted channels (`Channel::bit`).
     pub faulted: u8,
+    /// Channels whose reading may be frozen (`frozen`): not leak evidence.
+    pub suspect: u8,
 }
 
 /// Checks samples and remembers which channels are faulted, to report
@@ -52,6 +55,7 @@ pub struct SampleChecker {
     position_offset: f32,
     pressure_range: (f32, f32),
     position_range: (f32, f32),
+    frozen: frozen::FrozenDetector,
     faulted: u8,
 }
 
@@ -69,6 +73,12 @@ impl SampleChecker {
                 s.pressure_range_bar[1] as f32,
             ),
             position_range: (-margin, stroke + margin),
+            frozen: frozen::FrozenDetector::new(frozen::FrozenConfig {
+                stroke_m: stroke,
+                dead_zone: params.valve.dead_zone as f32,
+                null_offset: params.valve.null_offset as f32,
+                position_offset_m: s.position_offset_m as f32,
+            }),
             faulted: 0,
         }
     }
@@ -102,6 +112,8 @@ impl SampleChecker {
             self.position_range.1,
         );
         let u_valve = read(Channel::UValve, 0.0, -U_VALVE_LIMIT, U_VALVE_LIMIT).clamp(-1.0, 1.0);
+        let frozen = self.frozen.update(s);
+        faulted |= frozen.frozen;
         let required = faulted;
         let temp_oil_c = match s.temp_oil_c {
             None => None,
@@ -130,7 +142,11 @@ impl SampleChecker {
             u_valve,
             temp_oil_c,
         });
-        Checked { values, faulted }
+        Checked {
+            values,
+            faulted,
+            suspect: frozen.suspect,
+        }
     }
 }
 
@@ -205,4 +221,5 @@ mod tests {
 // engineering units, NAMUR NE43 limits and fault debounce.
 pub mod current_loop;
 pub mod frontend;
+pub mod frozen;
 pub mod ne43;
