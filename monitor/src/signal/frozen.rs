@@ -41,15 +41,15 @@ use crate::sample::{Channel, Sample};
 
 /// Rest time (valve not feeding) in completed runs before the noise-based
 /// test applies, s.
-pub const LEARN_S: f64 = 5.0;
+pub const LEARN_S: f32 = 5.0;
 /// A run this many times longer than the longest seen is a freeze.
-pub const NOISE_FACTOR: f64 = 50.0;
+pub const NOISE_FACTOR: f32 = 50.0;
 /// Shortest run the noise-based test flags, s.
-pub const REST_MIN_S: f64 = 0.5;
+pub const REST_MIN_S: f32 = 0.5;
 /// Shortest run the motion-based tests flag, s.
-pub const FROZEN_S: f64 = 1.0;
+pub const FROZEN_S: f32 = 1.0;
 /// Feeding time within a run that must move the piston, s.
-pub const FEEDING_MIN_S: f64 = 0.5;
+pub const FEEDING_MIN_S: f32 = 0.5;
 /// Valve opening beyond the dead zone that counts as open, fraction of
 /// travel (≈ 0.3 l/min at 3 bar on the reference valve: millimetres per
 /// second of piston speed).
@@ -62,14 +62,14 @@ pub const END_STOP_MARGIN_M: f32 = 0.003;
 /// Position travel during which a chamber pressure should change, m.
 pub const TRAVEL_MIN_M: f32 = 0.005;
 /// For the travel test, a run this many times the longest seen.
-pub const TRAVEL_NOISE_FACTOR: f64 = 10.0;
+pub const TRAVEL_NOISE_FACTOR: f32 = 10.0;
 
 /// A run this many times the longest seen makes a channel suspect.
-pub const SUSPECT_FACTOR: f64 = 10.0;
+pub const SUSPECT_FACTOR: f32 = 10.0;
 /// Shortest run that makes a channel suspect, s.
-pub const SUSPECT_MIN_S: f64 = 0.05;
+pub const SUSPECT_MIN_S: f32 = 0.05;
 /// Feeding time without a change that makes the position suspect, s.
-pub const SUSPECT_FEEDING_S: f64 = 0.1;
+pub const SUSPECT_FEEDING_S: f32 = 0.1;
 
 /// Channels found frozen, and channels suspected (`Channel::bit`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -88,19 +88,20 @@ const TESTED: [Channel; 3] = [Channel::PPiston, Channel::PRod, Channel::XPiston]
 struct Run {
     /// The reading's bit pattern, `None` while the channel is missing.
     bits: Option<u32>,
-    /// Time of the run's first sample, s.
-    since_s: f64,
+    /// Time since the run's first sample, s. (f32 durations: software f64
+    /// would cost the MCU ~2 000 instructions a step here.)
+    held_s: f32,
     /// Position reading range during the run (pressure channels), m.
     x_min: f32,
     x_max: f32,
     /// Time the valve fed the piston during the run (position), s.
-    feeding_s: f64,
+    feeding_s: f32,
     /// Time the valve did not feed the piston during the run, s.
-    resting_s: f64,
+    resting_s: f32,
     /// Longest completed run so far, s.
-    longest_s: f64,
+    longest_s: f32,
     /// Rest time in completed runs so far, s.
-    rest_s: f64,
+    rest_s: f32,
 }
 
 /// Geometry and valve the detector needs (from the parameters).
@@ -162,7 +163,9 @@ impl FrozenDetector {
     pub fn update(&mut self, s: &Sample) -> Frozen {
         // A time that does not increase adds nothing (the monitor ignores
         // the sample); a gap is not time the reading was seen to hold.
-        let dt = self.last_t.map_or(0.0, |t0| (s.t_s - t0).clamp(0.0, 0.1));
+        let dt = self
+            .last_t
+            .map_or(0.0, |t0| (s.t_s - t0).clamp(0.0, 0.1) as f32);
         self.last_t = Some(s.t_s);
         let feeding = self.feeding(s);
         let x = s.x_piston_m;
@@ -171,18 +174,20 @@ impl FrozenDetector {
             let bits = s.get(ch).map(f32::to_bits);
             if bits.is_none() || bits != run.bits {
                 if run.bits.is_some() {
-                    run.longest_s = run.longest_s.max(s.t_s - run.since_s);
+                    run.longest_s = run.longest_s.max(run.held_s);
                     run.rest_s += run.resting_s;
                 }
                 *run = Run {
                     bits,
-                    since_s: s.t_s,
+                    held_s: 0.0,
                     x_min: x.unwrap_or(f32::NAN),
                     x_max: x.unwrap_or(f32::NAN),
                     feeding_s: 0.0,
                     resting_s: 0.0,
                     ..*run
                 };
+            } else {
+                run.held_s += dt;
             }
             // The interval up to this sample counts for the current run.
             if feeding {
@@ -196,7 +201,7 @@ impl FrozenDetector {
                 run.x_min = run.x_min.min(x);
                 run.x_max = run.x_max.max(x);
             }
-            let held_s = s.t_s - run.since_s;
+            let held_s = run.held_s;
             let noise =
                 run.rest_s >= LEARN_S && held_s >= REST_MIN_S.max(NOISE_FACTOR * run.longest_s);
             let motion = held_s >= FROZEN_S
