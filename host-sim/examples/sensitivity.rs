@@ -121,10 +121,10 @@ fn main() {
         ),
     ];
     let filter: Option<String> = std::env::args().nth(1).filter(|s| !s.is_empty());
-    let params = match std::env::args().nth(2) {
-        Some(p) => host_sim::load_params(std::path::Path::new(&p)).unwrap(),
-        None => Params::nominal(),
-    };
+    let params = host_sim::load_params_or_nominal(
+        std::env::args().nth(2).as_deref().map(std::path::Path::new),
+    )
+    .unwrap();
     for supply in [50.0, 100.0] {
         for (name, f) in &cases {
             if filter.as_ref().is_some_and(|s| !name.contains(s.as_str())) {

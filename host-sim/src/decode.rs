@@ -131,13 +131,6 @@ pub enum Outcome {
     Foreign,
 }
 
-impl Outcome {
-    /// Is this a protection or format error?
-    pub fn is_error(self) -> bool {
-        !matches!(self, Self::Ok | Self::Foreign)
-    }
-}
-
 /// One decoded log line (the `--json` output, one object per line).
 #[derive(Clone, Debug, Serialize)]
 pub struct FrameRecord {

@@ -13,7 +13,7 @@
 use crate::calibrate::calibrate;
 use crate::recording::{RecordingReader, RecordingWriter};
 use crate::sim::{perturbed_rig, LeakLaw, Profile, Rig, Scenario, SensorModel, Simulation};
-use monitor::{Hypothesis, Monitor, Params, Sample, Verdict};
+use monitor::{Hypothesis, Monitor, Params, Sample};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 
@@ -82,8 +82,9 @@ pub struct CaseResult {
     /// True internal / external flow magnitude averaged like the estimate,
     /// l/min.
     pub true_lpm: [f64; 2],
-    /// Largest |detection average| before the onset (healthy: whole run,
-    /// after warm-up), internal / external, l/min: the false-alarm margin.
+    /// Largest (signed) detection average before the onset (healthy: whole
+    /// run, after warm-up), internal / external, l/min: the false-alarm
+    /// margin, as the alarm's CUSUM sees it.
     pub quiet_peak_lpm: [f64; 2],
     /// When a present leak's true flow (averaged like the detection, 0.25 s)
     /// first exceeded the alarm level, s. An internal leak only flows while
@@ -330,7 +331,7 @@ pub fn run_case(c: &Case, rows: &Rows, params: &Params) -> CaseResult {
     let mut flowing = None;
     for (sample, q) in rows {
         let s = monitor.step(sample);
-        let dt = last_t.map_or(0.001, |t0| sample.t_s - t0);
+        let dt = last_t.map_or(params.filter.sample_period_s, |t0| sample.t_s - t0);
         last_t = Some(sample.t_s);
         let a = (dt / window).min(1.0);
         truth[0] += a * (q[0].abs() - truth[0]);
@@ -365,11 +366,7 @@ pub fn run_case(c: &Case, rows: &Rows, params: &Params) -> CaseResult {
     let last = last.expect("at least one sample");
     CaseResult {
         case: c.clone(),
-        verdict: if last.verdict == Verdict::SensorFault {
-            "sensor_fault"
-        } else {
-            last.verdict.name()
-        },
+        verdict: last.verdict.name(),
         first_alarm_s: first_alarm.map(|a| a.0),
         first_alarm: first_alarm.map(|a| a.1),
         leading: last.leading.name(),

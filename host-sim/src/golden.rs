@@ -7,7 +7,7 @@
 //! [`replay`], so a golden is what `host-sim replay` computes.
 
 use crate::recording::RecordingReader;
-use crate::replay::{replay, Observer};
+use crate::replay::{replay, sample_period, Observer};
 use anyhow::{bail, ensure, Context, Result};
 use golden::expected::{Expected, Writer};
 use golden::fnv::Fnv64;
@@ -40,20 +40,6 @@ pub struct Case {
     pub verdict: Verdict,
     /// Events as (time s, description).
     pub events: Vec<(f64, String)>,
-}
-
-/// The nominal sample period as `replay` derives it: metadata
-/// `sample_rate_hz`, else the first time step.
-fn sample_period(meta_rate: Option<&str>, samples: &[Sample]) -> Option<f64> {
-    if let Some(rate) = meta_rate.and_then(|r| r.trim().parse::<f64>().ok()) {
-        if rate.is_finite() && rate > 0.0 {
-            return Some(1.0 / rate);
-        }
-    }
-    match samples {
-        [a, b, ..] if b.t_s > a.t_s => Some(b.t_s - a.t_s),
-        _ => None,
-    }
 }
 
 /// Hashes the first `n` statuses of a replay.
@@ -90,7 +76,9 @@ pub fn generate(root: &Path, spec: &CaseSpec) -> Result<Case> {
         samples.len(),
         spec.samples
     );
-    let period = sample_period(rate.as_deref(), &samples)
+    let period = samples
+        .first()
+        .and_then(|first| sample_period(rate.as_deref(), first, samples.get(1)))
         .with_context(|| format!("{}: no sample period", path.display()))?;
     let params = golden_params(period, spec.warm_up_s);
 

@@ -17,10 +17,21 @@ pub mod sim;
 use monitor::Params;
 use std::path::Path;
 
-/// Read a whole recording into memory (calibration needs random access).
-pub fn read_all(path: &Path) -> anyhow::Result<Vec<monitor::Sample>> {
-    let r = recording::RecordingReader::open(path)?;
-    Ok(r.collect::<Result<Vec<_>, _>>()?)
+/// Read a whole recording into memory (calibration needs random access),
+/// with its sample period as `replay` derives it.
+pub fn read_all(path: &Path) -> anyhow::Result<(Vec<monitor::Sample>, Option<f64>)> {
+    let mut r = recording::RecordingReader::open(path)?;
+    let rate = r.meta("sample_rate_hz").map(str::to_string);
+    let samples = r.by_ref().collect::<Result<Vec<_>, _>>()?;
+    let period = samples
+        .first()
+        .and_then(|first| replay::sample_period(rate.as_deref(), first, samples.get(1)));
+    Ok((samples, period))
+}
+
+/// The parameters in `path` (see [`load_params`]), or the reference rig's.
+pub fn load_params_or_nominal(path: Option<&Path>) -> anyhow::Result<Params> {
+    path.map_or_else(|| Ok(Params::nominal()), load_params)
 }
 
 /// Load installation parameters from a TOML file (only the fields it sets

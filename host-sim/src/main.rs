@@ -394,10 +394,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
             trace_every,
             f64,
         } => {
-            let params = match &params {
-                Some(p) => host_sim::load_params(p)?,
-                None => Params::nominal(),
-            };
+            let params = host_sim::load_params_or_nominal(params.as_deref())?;
             anyhow::ensure!(
                 trace.is_none() || recordings.len() == 1,
                 "--trace takes a single recording"
@@ -415,10 +412,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
             output,
             params,
         } => {
-            let params = match &params {
-                Some(p) => host_sim::load_params(p)?,
-                None => Params::nominal(),
-            };
+            let params = host_sim::load_params_or_nominal(params.as_deref())?;
             let output = output.unwrap_or_else(|| default_plot_path(&recording));
             let reader = RecordingReader::open(&recording)?;
             let mut obs = host_sim::plot::PlotObserver::new(host_sim::plot::MAX_POINTS);
@@ -438,11 +432,13 @@ fn run(cli: Cli) -> Result<ExitCode> {
             output,
             params,
         } => {
-            let start = match &params {
-                Some(p) => host_sim::load_params(p)?,
-                None => Params::nominal(),
-            };
-            let samples = host_sim::read_all(&recording)?;
+            let start = host_sim::load_params_or_nominal(params.as_deref())?;
+            let (samples, period) = host_sim::read_all(&recording)?;
+            // Calibrate at the recording's own rate, as `replay` runs it.
+            let mut start = start;
+            if let Some(p) = period {
+                start.filter.sample_period_s = p;
+            }
             let cal = host_sim::calibrate::calibrate(&samples, &start)
                 .with_context(|| format!("{}", recording.display()))?;
             print!("{}", cal.report());
@@ -472,10 +468,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
             cache,
             out,
         } => {
-            let params = match &params {
-                Some(p) => host_sim::load_params(p)?,
-                None => Params::nominal(),
-            };
+            let params = host_sim::load_params_or_nominal(params.as_deref())?;
             let kind_name = |k: &str| -> Result<&'static str> {
                 Ok(match k {
                     "healthy" => "healthy",
@@ -598,10 +591,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
             no_truth,
             dump_rig,
         } => {
-            let nominal = match &rig {
-                Some(p) => host_sim::load_params(p)?,
-                None => Params::nominal(),
-            };
+            let nominal = host_sim::load_params_or_nominal(rig.as_deref())?;
             let mut scenario = Scenario {
                 duration_s: duration,
                 supply_bar: supply,

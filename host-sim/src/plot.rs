@@ -6,8 +6,8 @@
 //! The replay streams; the plot keeps a bounded number of points
 //! ([`Decimator`]), so an hour-long recording plots in constant memory.
 
-use crate::replay::{Observer, ReplaySummary};
-use monitor::{Event, Params, Sample, Status};
+use crate::replay::{EventRecord, Observer, ReplaySummary};
+use monitor::{Params, Sample, Status};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::path::Path;
@@ -92,13 +92,34 @@ pub struct Marker {
     pub label: String,
 }
 
-/// Collects what the plot needs while a replay runs.
+impl Marker {
+    /// The replay's alarm, sensor and data-gap events as markers, labelled
+    /// with the replay's own names (`alarm internal`, `sensor fault p_rod`).
+    /// Filter resets are in the event list but would only clutter the plot.
+    pub fn from_events(events: &[EventRecord]) -> Vec<Marker> {
+        events
+            .iter()
+            .filter(|e| e.kind != "filter_reset")
+            .map(|e| {
+                let what = e.kind.replace('_', " ");
+                Marker {
+                    t_s: e.t,
+                    label: match e.verdict.or(e.sensor) {
+                        Some(detail) => format!("{what} {detail}"),
+                        None => what,
+                    },
+                }
+            })
+            .collect()
+    }
+}
+
+/// Collects the plotted series while a replay runs (the events come from
+/// the replay's summary).
 #[derive(Clone, Debug)]
 pub struct PlotObserver {
     /// The decimated series.
     pub series: Decimator,
-    /// Alarm, sensor and data-gap events (every one, not decimated).
-    pub markers: Vec<Marker>,
 }
 
 impl PlotObserver {
@@ -106,7 +127,6 @@ impl PlotObserver {
     pub fn new(max_points: usize) -> Self {
         Self {
             series: Decimator::new(max_points),
-            markers: Vec::new(),
         }
     }
 }
@@ -130,19 +150,6 @@ impl Observer for PlotObserver {
             probability: st.evidence.map(|e| e.probability),
             evidence_weight: st.evidence_weight,
         });
-        for e in &st.events {
-            let label = match *e {
-                Event::AlarmRaised(v) => format!("alarm {}", v.name()),
-                Event::AlarmCleared => "alarm cleared".into(),
-                Event::SensorFault(c) => format!("sensor fault {}", c.name()),
-                Event::SensorRecovered(c) => format!("sensor recovered {}", c.name()),
-                Event::DataGap => "data gap".into(),
-                // Resets are in the replay's event list; on the plot they
-                // would only clutter the alarms.
-                Event::FilterReset(_) => continue,
-            };
-            self.markers.push(Marker { t_s: s.t_s, label });
-        }
         Ok(())
     }
 }
@@ -368,7 +375,7 @@ pub fn write_svg(
         .titled(&heading, ("sans-serif", 18))
         .map_err(|e| draw(e.to_string()))?;
     let areas = root.split_evenly((5, 1));
-    let m = &observer.markers;
+    let m = &Marker::from_events(&summary.events);
     // Until the filters have warmed up there are no estimates to show.
     let warm_up_end = pts
         .iter()

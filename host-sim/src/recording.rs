@@ -260,22 +260,12 @@ impl<R: BufRead> RecordingReader<R> {
         })
     }
 
-    /// `# key=value` metadata from before the header.
-    pub fn metadata(&self) -> &[(String, String)] {
-        &self.metadata
-    }
-
     /// A metadata value.
     pub fn meta(&self, key: &str) -> Option<&str> {
         self.metadata
             .iter()
             .find(|(k, _)| k == key)
             .map(|(_, v)| v.as_str())
-    }
-
-    /// Whether the recording has a `temp_oil` column.
-    pub fn has_temperature(&self) -> bool {
-        self.cols.channels[Channel::TempOil as usize].is_some()
     }
 
     /// Columns beyond the format's (name, position), e.g. simulator truth.
@@ -288,8 +278,8 @@ impl<R: BufRead> RecordingReader<R> {
         self.record.get(index)
     }
 
-    /// Read the next sample.
-    pub fn next_sample(&mut self) -> Option<Result<Sample, RecordingError>> {
+    /// Read the next sample (the iterator adds the time-order check).
+    fn next_sample(&mut self) -> Option<Result<Sample, RecordingError>> {
         if self.failed {
             return None;
         }

@@ -172,8 +172,13 @@ impl<W: Write> Observer for TraceWriter<W> {
 }
 
 /// The nominal sample period: metadata `sample_rate_hz` if present, else
-/// the first time step (so gap detection works at any rate).
-fn sample_period(meta_rate: Option<&str>, first: &Sample, second: Option<&Sample>) -> Option<f64> {
+/// the first time step (so gap detection works at any rate). Every command
+/// that runs the monitor over a recording derives it here.
+pub fn sample_period(
+    meta_rate: Option<&str>,
+    first: &Sample,
+    second: Option<&Sample>,
+) -> Option<f64> {
     if let Some(rate) = meta_rate.and_then(|r| r.trim().parse::<f64>().ok()) {
         if rate.is_finite() && rate > 0.0 {
             return Some(1.0 / rate);

@@ -2,9 +2,11 @@
 //! healthy recording, and with them the monitor reads zero leak there and
 //! still finds real leaks.
 
+mod common;
+
 use host_sim::calibrate::calibrate;
 use host_sim::sim::{perturbed_rig, Rig, Scenario, Simulation};
-use monitor::{Monitor, Params, Sample, Verdict};
+use monitor::{Params, Sample, Verdict};
 
 fn healthy_run(rig: &Rig, sensors: &host_sim::sim::SensorModel, seed: u64) -> Vec<Sample> {
     let sc = Scenario {
@@ -94,19 +96,10 @@ fn calibrated_monitor_detects_a_leak_on_the_other_rig() {
         sensors,
         ..Scenario::default()
     };
-    let mut m: Monitor<f32> = Monitor::new(&cal.params).unwrap();
-    let mut alarm = None;
-    let mut last = None;
-    for row in Simulation::new(sc, rig) {
-        let s = m.step(&row.sample);
-        if alarm.is_none() && s.verdict.is_leak() {
-            alarm = Some(s.t_s);
-        }
-        last = Some(s);
-    }
-    let t = alarm.expect("leak detected");
+    let run = common::run_with(sc, rig, &cal.params);
+    let t = run.first_alarm.expect("leak detected").0;
     assert!(t > 25.0 && t < 30.0, "alarm at {t}");
-    assert_eq!(last.unwrap().verdict, Verdict::Internal);
+    assert_eq!(run.final_status.verdict, Verdict::Internal);
 }
 
 #[test]

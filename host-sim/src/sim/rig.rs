@@ -21,8 +21,7 @@ use monitor::fluid::bulk_modulus_exact;
 use monitor::load::load_terms_exact;
 use monitor::Params;
 
-const BAR: f64 = 1e5;
-const LPM: f64 = 1.0 / 60_000.0;
+use super::{BAR, LPM};
 
 /// How a leak's flow depends on its pressure difference.
 #[derive(

@@ -9,8 +9,7 @@ use monitor::{Params, Sample};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-const BAR: f64 = 1e5;
-const LPM: f64 = 1.0 / 60_000.0;
+use super::{BAR, LPM};
 /// Fine integration step, s.
 pub const FINE_STEP_S: f64 = 5e-5;
 
@@ -345,7 +344,8 @@ fn mean_leak_flows(scenario: &Scenario, plant: &Rig, ki: f64, ke: f64) -> (f64, 
 impl Simulation {
     /// A run of `scenario` on a rig with plant parameters `plant`. The leak
     /// coefficients are found so that the mean leak flows after onset are
-    /// the scenario's l/min (a few short pre-runs).
+    /// the scenario's l/min (up to three full-length pre-runs: a leaky run
+    /// costs up to four healthy ones).
     pub fn new(scenario: Scenario, plant: Rig) -> Self {
         let (ki, ke) = leak_coefficients(&scenario, &plant);
         Self::with_coefficients(scenario, plant, ki, ke)
@@ -367,6 +367,13 @@ impl Simulation {
         let settle_traj = traj.at(0.0);
         let mut u = 0.0;
         let h = FINE_STEP_S;
+        // Settling happens before t = 0: a leak present from the start
+        // (onset 0) acts during it, a later one does not.
+        let t_settle = if scenario.leak_onset_s <= 0.0 {
+            0.0
+        } else {
+            -1.0
+        };
         for i in 0..(2.0 / h) as usize {
             if i % 20 == 0 {
                 if let Segment::Track { from, .. } = settle_traj {
@@ -374,13 +381,6 @@ impl Simulation {
                         .clamp(-scenario.command_limit, scenario.command_limit);
                 }
             }
-            // Settling happens before t = 0: a leak present from the start
-            // (onset 0) acts during it, a later one does not.
-            let t_settle = if scenario.leak_onset_s <= 0.0 {
-                0.0
-            } else {
-                -1.0
-            };
             state = rig.rk4(&state, u, t_settle, h).0;
         }
         let n = (scenario.duration_s * scenario.sample_rate_hz).round() as u64;
