@@ -141,16 +141,23 @@ impl<T: Real> Monitor<T> {
     pub fn step(&mut self, sample: &Sample) -> Status {
         let mut events = Events::new();
         let mut flags = 0u16;
-        let checked = self.checker.check(sample, &mut events);
-
         // Time step: a non-increasing time is ignored, a gap restarts.
         let dt = match self.last_t {
-            Some(t0) if !(sample.t_s > t0) => {
-                flags |= health::TIME_NOT_INCREASING;
-                return self.status(sample.t_s, checked.faulted, flags, events);
-            }
-            Some(t0) => sample.t_s - t0,
-            None => self.cfg.period_s,
+            Some(t0) if !(sample.t_s > t0) => None,
+            Some(t0) => Some(sample.t_s - t0),
+            None => Some(self.cfg.period_s),
+        };
+        // The time the readings were seen to hold, for the frozen-reading
+        // test: none before the first or at an ignored sample, at most
+        // 0.1 s across a gap.
+        let held_s = match (self.last_t, dt) {
+            (Some(_), Some(dt)) => (dt as f32).min(0.1),
+            _ => 0.0,
+        };
+        let checked = self.checker.check(sample, held_s, &mut events);
+        let Some(dt) = dt else {
+            flags |= health::TIME_NOT_INCREASING;
+            return self.status(sample.t_s, checked.faulted, flags, events);
         };
         self.last_t = Some(sample.t_s);
         if dt > self.cfg.gap_s && self.bank.is_some() {

@@ -77,7 +77,6 @@ impl SampleChecker {
                 stroke_m: stroke,
                 dead_zone: params.valve.dead_zone as f32,
                 null_offset: params.valve.null_offset as f32,
-                position_offset_m: s.position_offset_m as f32,
             }),
             faulted: 0,
         }
@@ -88,8 +87,10 @@ impl SampleChecker {
         self.faulted
     }
 
-    /// Condition `s`, pushing fault and recovery events.
-    pub fn check(&mut self, s: &Sample, events: &mut Events) -> Checked {
+    /// Condition `s`, pushing fault and recovery events. `dt_s` is the
+    /// time since the previous sample on the monitor's clock (0 for the
+    /// first sample and for one it ignores), for the frozen-reading test.
+    pub fn check(&mut self, s: &Sample, dt_s: f32, events: &mut Events) -> Checked {
         let mut faulted = 0u8;
         let mut read = |ch: Channel, offset: f32, lo: f32, hi: f32| -> f32 {
             match s.get(ch) {
@@ -112,7 +113,14 @@ impl SampleChecker {
             self.position_range.1,
         );
         let u_valve = read(Channel::UValve, 0.0, -U_VALVE_LIMIT, U_VALVE_LIMIT).clamp(-1.0, 1.0);
-        let frozen = self.frozen.update(s);
+        let readings = (faulted == 0).then_some(frozen::Readings {
+            p_supply_bar,
+            p_piston_bar,
+            p_rod_bar,
+            x_piston_m,
+            u_valve,
+        });
+        let frozen = self.frozen.update(s, dt_s, readings.as_ref());
         faulted |= frozen.frozen;
         let required = faulted;
         let temp_oil_c = match s.temp_oil_c {
@@ -171,12 +179,12 @@ mod tests {
     fn missing_or_implausible_readings_fault_their_channel() {
         let mut c = SampleChecker::new(&Params::nominal());
         let mut ev = Events::new();
-        assert!(c.check(&good(), &mut ev).values.is_some());
+        assert!(c.check(&good(), 1e-3, &mut ev).values.is_some());
         assert!(ev.is_empty());
         let mut s = good();
         s.p_rod_bar = None;
         s.x_piston_m = Some(0.5);
-        let r = c.check(&s, &mut ev);
+        let r = c.check(&s, 1e-3, &mut ev);
         assert!(r.values.is_none());
         assert_eq!(r.faulted, Channel::PRod.bit() | Channel::XPiston.bit());
         assert_eq!(
@@ -187,7 +195,7 @@ mod tests {
             ]
         );
         ev.clear();
-        let r = c.check(&good(), &mut ev);
+        let r = c.check(&good(), 1e-3, &mut ev);
         assert_eq!(r.faulted, 0);
         assert_eq!(ev.len(), 2);
     }
@@ -198,7 +206,7 @@ mod tests {
         let mut ev = Events::new();
         let mut s = good();
         s.temp_oil_c = Some(900.0);
-        let r = c.check(&s, &mut ev);
+        let r = c.check(&s, 1e-3, &mut ev);
         assert!(r.values.is_some());
         assert_eq!(r.values.unwrap().temp_oil_c, None);
         assert_eq!(r.faulted, Channel::TempOil.bit());
@@ -210,7 +218,7 @@ mod tests {
         p.sensors.pressure_offsets_bar = [0.5, -0.2, 0.1, 0.3];
         p.sensors.position_offset_m = 0.002;
         let mut c = SampleChecker::new(&p);
-        let v = c.check(&good(), &mut Events::new()).values.unwrap();
+        let v = c.check(&good(), 1e-3, &mut Events::new()).values.unwrap();
         assert_eq!(v.p_supply_bar, 49.5);
         assert_eq!(v.p_piston_bar, 21.6);
         assert_eq!(v.x_piston_m, 0.038);
@@ -221,5 +229,6 @@ mod tests {
 // engineering units, NAMUR NE43 limits and fault debounce.
 pub mod current_loop;
 pub mod frontend;
-pub mod frozen;
 pub mod ne43;
+// Frozen readings, checked by `SampleChecker` on the device and the host.
+pub mod frozen;

@@ -88,15 +88,13 @@ const TESTED: [Channel; 3] = [Channel::PPiston, Channel::PRod, Channel::XPiston]
 struct Run {
     /// The reading's bit pattern, `None` while the channel is missing.
     bits: Option<u32>,
-    /// Time since the run's first sample, s. (f32 durations: software f64
-    /// would cost the MCU ~2 000 instructions a step here.)
-    held_s: f32,
     /// Position reading range during the run (pressure channels), m.
     x_min: f32,
     x_max: f32,
     /// Time the valve fed the piston during the run (position), s.
     feeding_s: f32,
-    /// Time the valve did not feed the piston during the run, s.
+    /// Time the valve did not feed the piston during the run, s. The run
+    /// has lasted `feeding_s + resting_s`.
     resting_s: f32,
     /// Longest completed run so far, s.
     longest_s: f32,
@@ -104,7 +102,7 @@ struct Run {
     rest_s: f32,
 }
 
-/// Geometry and valve the detector needs (from the parameters).
+/// The valve and stroke the feeding test needs (from the parameters).
 #[derive(Clone, Copy, Debug)]
 pub struct FrozenConfig {
     /// Stroke, m.
@@ -113,8 +111,22 @@ pub struct FrozenConfig {
     pub dead_zone: f32,
     /// Valve null offset, fraction of travel.
     pub null_offset: f32,
-    /// Position sensor offset, m (subtracted from the reading).
-    pub position_offset_m: f32,
+}
+
+/// Conditioned readings the feeding test uses (offsets removed, command
+/// clamped), when every one of them is valid.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Readings {
+    /// Supply pressure, bar.
+    pub p_supply_bar: f32,
+    /// Piston-chamber pressure, bar.
+    pub p_piston_bar: f32,
+    /// Rod-chamber pressure, bar.
+    pub p_rod_bar: f32,
+    /// Piston position, m.
+    pub x_piston_m: f32,
+    /// Valve command, [-1, 1].
+    pub u_valve: f32,
 }
 
 /// Tracks runs of identical readings and reports frozen channels.
@@ -122,7 +134,6 @@ pub struct FrozenConfig {
 pub struct FrozenDetector {
     cfg: FrozenConfig,
     runs: [Run; 3],
-    last_t: Option<f64>,
 }
 
 impl FrozenDetector {
@@ -131,77 +142,67 @@ impl FrozenDetector {
         Self {
             cfg,
             runs: [Run::default(); 3],
-            last_t: None,
         }
     }
 
-    /// Whether the valve feeds the piston at this sample: open beyond the
-    /// dead zone, a pressure drop across the feeding edge, away from the
-    /// end stops.
-    fn feeding(&self, s: &Sample) -> bool {
-        let (Some(u), Some(ps), Some(p3), Some(p4), Some(x)) = (
-            s.u_valve,
-            s.p_supply_bar,
-            s.p_piston_bar,
-            s.p_rod_bar,
-            s.x_piston_m,
-        ) else {
-            return false;
-        };
-        let spool = u + self.cfg.null_offset;
+    /// Whether the valve feeds the piston: open beyond the dead zone, a
+    /// pressure drop across the feeding edge, away from the end stops.
+    fn feeding(&self, r: &Readings) -> bool {
+        let spool = r.u_valve + self.cfg.null_offset;
         let opening = spool.abs() - self.cfg.dead_zone;
         // Extending feeds the piston chamber, retracting the rod chamber.
-        let drop = if spool > 0.0 { ps - p3 } else { ps - p4 };
-        let x = x - self.cfg.position_offset_m;
+        let drop = r.p_supply_bar
+            - if spool > 0.0 {
+                r.p_piston_bar
+            } else {
+                r.p_rod_bar
+            };
         opening >= OPENING_MIN
             && drop >= METERING_DROP_MIN_BAR
-            && x > END_STOP_MARGIN_M
-            && x < self.cfg.stroke_m - END_STOP_MARGIN_M
+            && r.x_piston_m > END_STOP_MARGIN_M
+            && r.x_piston_m < self.cfg.stroke_m - END_STOP_MARGIN_M
     }
 
-    /// Update with sample `s`; returns the frozen and suspect channels.
-    pub fn update(&mut self, s: &Sample) -> Frozen {
-        // A time that does not increase adds nothing (the monitor ignores
-        // the sample); a gap is not time the reading was seen to hold.
-        let dt = self
-            .last_t
-            .map_or(0.0, |t0| (s.t_s - t0).clamp(0.0, 0.1) as f32);
-        self.last_t = Some(s.t_s);
-        let feeding = self.feeding(s);
+    /// Update with the raw sample `s` (its bit patterns are compared), the
+    /// time since the previous sample `dt_s` (the monitor's clock: 0 for
+    /// the first sample and for one it ignores) and the conditioned
+    /// `readings` (`None` if any of them is faulted). Returns the frozen
+    /// and suspect channels.
+    pub fn update(&mut self, s: &Sample, dt_s: f32, readings: Option<&Readings>) -> Frozen {
+        let feeding = readings.is_some_and(|r| self.feeding(r));
         let x = s.x_piston_m;
         let mut out = Frozen::default();
         for (run, ch) in self.runs.iter_mut().zip(TESTED) {
+            // The interval up to this sample belongs to the run it ends.
+            if feeding {
+                run.feeding_s += dt_s;
+            } else {
+                run.resting_s += dt_s;
+            }
             let bits = s.get(ch).map(f32::to_bits);
             if bits.is_none() || bits != run.bits {
                 if run.bits.is_some() {
-                    run.longest_s = run.longest_s.max(run.held_s);
+                    run.longest_s = run.longest_s.max(run.feeding_s + run.resting_s);
                     run.rest_s += run.resting_s;
                 }
                 *run = Run {
                     bits,
-                    held_s: 0.0,
-                    x_min: x.unwrap_or(f32::NAN),
-                    x_max: x.unwrap_or(f32::NAN),
+                    x_min: f32::NAN,
+                    x_max: f32::NAN,
                     feeding_s: 0.0,
                     resting_s: 0.0,
                     ..*run
                 };
-            } else {
-                run.held_s += dt;
             }
-            // The interval up to this sample counts for the current run.
-            if feeding {
-                run.feeding_s += dt;
-            } else {
-                run.resting_s += dt;
+            if bits.is_none() {
+                continue;
             }
-            let Some(_) = bits else { continue };
             if let Some(x) = x {
-                // NaN-safe: min/max ignore a NaN start.
+                // NaN-safe: min/max ignore the NaN start.
                 run.x_min = run.x_min.min(x);
                 run.x_max = run.x_max.max(x);
             }
-            let held_s = run.held_s;
+            let held_s = run.feeding_s + run.resting_s;
             let noise =
                 run.rest_s >= LEARN_S && held_s >= REST_MIN_S.max(NOISE_FACTOR * run.longest_s);
             let motion = held_s >= FROZEN_S
@@ -231,12 +232,26 @@ impl FrozenDetector {
 mod tests {
     use super::*;
 
+    /// One 1 kHz step of `d` with the sample's own readings (no offsets).
+    fn update(d: &mut FrozenDetector, s: &Sample) -> Frozen {
+        let readings = (|| {
+            Some(Readings {
+                p_supply_bar: s.p_supply_bar?,
+                p_piston_bar: s.p_piston_bar?,
+                p_rod_bar: s.p_rod_bar?,
+                x_piston_m: s.x_piston_m?,
+                u_valve: s.u_valve?,
+            })
+        })();
+        let dt = if s.t_s == 0.0 { 0.0 } else { 1e-3 };
+        d.update(s, dt, readings.as_ref())
+    }
+
     fn cfg() -> FrozenConfig {
         FrozenConfig {
             stroke_m: 0.18,
             dead_zone: 0.015,
             null_offset: 0.0,
-            position_offset_m: 0.0,
         }
     }
 
@@ -276,7 +291,7 @@ mod tests {
         let mut d = FrozenDetector::new(cfg());
         let (mut any, mut first) = (0, None);
         for k in 0..n {
-            let b = d.update(&f(k)).frozen;
+            let b = update(&mut d, &f(k)).frozen;
             if b != 0 && first.is_none() {
                 first = Some(k);
             }
@@ -365,10 +380,10 @@ mod tests {
             if k >= 16_000 {
                 s.x_piston_m = Some(0.05);
             }
-            let _ = d.update(&s);
+            let _ = update(&mut d, &s);
         }
         assert_ne!(
-            d.update(&{
+            update(&mut d, &{
                 let mut s = cycle(16_900, 1.0);
                 s.x_piston_m = Some(0.05);
                 s
@@ -376,7 +391,7 @@ mod tests {
             .frozen,
             0
         );
-        assert_eq!(d.update(&cycle(16_901, 1.0)), Frozen::default());
+        assert_eq!(update(&mut d, &cycle(16_901, 1.0)), Frozen::default());
     }
 
     #[test]
@@ -388,7 +403,7 @@ mod tests {
             if k >= 16_000 {
                 s.x_piston_m = Some(0.05);
             }
-            let f = d.update(&s);
+            let f = update(&mut d, &s);
             if f.suspect != 0 && suspect_at.is_none() {
                 suspect_at = Some(k);
                 assert_eq!(f.suspect, Channel::XPiston.bit());
@@ -403,7 +418,7 @@ mod tests {
         // (but for slow feeding moves: the position check).
         let mut d = FrozenDetector::new(cfg());
         for k in 0..60_000 {
-            let f = d.update(&cycle(k, 0.0));
+            let f = update(&mut d, &cycle(k, 0.0));
             assert_eq!(f.suspect & !Channel::XPiston.bit(), 0, "at {k}");
         }
     }
