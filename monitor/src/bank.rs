@@ -49,20 +49,10 @@ pub struct Measurement<T> {
 /// What one filter did on one sample.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct FilterOutput<T> {
-    /// Innovations (measurement − prediction), scaled units.
-    pub innovation: [T; NZ],
     /// Normalised innovation squared Σν²/s (χ² with 3 dof if consistent).
     pub nis: T,
     /// Gaussian log-likelihood of this sample's measurements.
     pub log_likelihood: T,
-    /// Internal leak coefficient estimate, l/min per 10 bar (0 if absent).
-    pub leak_internal: T,
-    /// External leak coefficient estimate, l/min per 10 bar (0 if absent).
-    pub leak_external: T,
-    /// Their standard deviations (0 if absent).
-    pub leak_internal_sd: T,
-    /// See `leak_internal_sd`.
-    pub leak_external_sd: T,
     /// Internal leak flow at the current pressures, l/min.
     pub flow_internal_lpm: T,
     /// External leak flow at the current pressures, l/min.
@@ -74,10 +64,6 @@ pub struct FilterOutput<T> {
     /// Valve flow-gain deviation estimates (extend, retract), relative
     /// (0.05 = 5 % more flow than parameterised).
     pub valve_gain: [T; 2],
-    /// Model acceleration |ẍ_p| at the start of the step, scaled (1 = 1 m/s²).
-    pub accel: T,
-    /// Largest model pressure rate at the start of the step, bar/s.
-    pub pressure_rate_bar_s: T,
     /// Metering flow through the valve (piston side) at the start of the
     /// step, l/min (magnitude).
     pub valve_flow_lpm: T,
@@ -86,8 +72,6 @@ pub struct FilterOutput<T> {
 /// What the three scalar updates of one step saw.
 #[derive(Clone, Copy, Debug)]
 struct Innovations<T> {
-    /// Innovations, scaled units.
-    innovation: [T; NZ],
     /// Σν²/s.
     nis: T,
     /// Product of the innovation variances (det S).
@@ -241,7 +225,6 @@ impl<T: Real, const N: usize> HypothesisFilter<T, N> {
             _ => T::ONE,
         });
         let mut inn = Innovations {
-            innovation: [T::ZERO; NZ],
             nis: T::ZERO,
             det: T::ONE,
         };
@@ -277,7 +260,6 @@ impl<T: Real, const N: usize> HypothesisFilter<T, N> {
         let u = self
             .ekf
             .update_state_weighted(j, m.z[k], r, k as u8, weights)?;
-        inn.innovation[k] = u.innovation;
         inn.nis += u.innovation * u.innovation / u.variance;
         inn.det *= u.variance;
         Ok(())
@@ -303,22 +285,15 @@ impl<T: Real, const N: usize> HypothesisFilter<T, N> {
         let dp_int = (self.ekf.x[P3] - self.ekf.x[P4]).abs() * per_10bar;
         let dp_ext = (self.ekf.x[P4] - ctx.inputs.p_tank_pa / T::c(P_REF)).abs() * per_10bar;
         FilterOutput {
-            innovation: inn.innovation,
             nis: inn.nis,
             // ln N(ν; 0, S) = −½·(νᵀS⁻¹ν + ln det S + 3·ln 2π).
             log_likelihood: T::c(-0.5)
                 * (inn.nis + inn.det.ln() + T::c(3.0 * 1.837_877_066_409_345_5)),
-            leak_internal,
-            leak_external,
-            leak_internal_sd,
-            leak_external_sd,
             flow_internal_lpm: leak_internal * dp_int,
             flow_external_lpm: leak_external * dp_ext,
             flow_internal_sd_lpm: leak_internal_sd * dp_int,
             flow_external_sd_lpm: leak_external_sd * dp_ext,
             valve_gain: [self.ekf.x[GAIN_EXT] * gref, self.ekf.x[GAIN_RET] * gref],
-            accel: (e.f[VP] * T::c(V_REF)).abs(),
-            pressure_rate_bar_s: e.f[P3].abs().max(e.f[P4].abs()) * T::c(P_REF / crate::model::BAR),
             valve_flow_lpm: e.q_valve_a.abs() * T::c(crate::model::LPM_PER_M3S),
         }
     }
@@ -543,7 +518,8 @@ fn set_symmetric<T: Real, const N: usize>(p: &mut SMatrix<T, N, N>, a: usize, b:
     p[(b, a)] = v;
 }
 
-/// Step `filter`, its output into `slot` (`None` if it failed).
+/// Step `filter`, its output into `slot` (`None` if it failed: a singular
+/// or non-finite innovation covariance, or a non-finite state).
 fn step_into<T: Real, const N: usize>(
     filter: &mut HypothesisFilter<T, N>,
     plant: &Plant<T>,
@@ -551,17 +527,8 @@ fn step_into<T: Real, const N: usize>(
     q: &[T; MAX_STATES],
     m: &Measurement<T>,
     slot: &mut Option<FilterOutput<T>>,
-) -> Result<(), EkfError> {
-    match filter.step(plant, ctx, q, m) {
-        Ok(out) => {
-            *slot = Some(out);
-            Ok(())
-        }
-        Err(e) => {
-            *slot = None;
-            Err(e)
-        }
-    }
+) {
+    *slot = filter.step(plant, ctx, q, m).ok();
 }
 
 /// The four filters.
@@ -594,8 +561,7 @@ impl<T: Real> Bank<T> {
 
     /// Step every filter, writing their outputs into `out` (in place: no
     /// copies of the outputs). A filter that fails is reported, not
-    /// stopped: its output is `None` and the returned result says why; the
-    /// caller re-initialises it.
+    /// stopped: its output is `None`; the caller re-initialises it.
     pub fn step(
         &mut self,
         plant: &Plant<T>,
@@ -603,15 +569,13 @@ impl<T: Real> Bank<T> {
         noise: &ProcessNoise<T>,
         m: &Measurement<T>,
         out: &mut BankOutput<T>,
-    ) -> [Result<(), EkfError>; 4] {
+    ) {
         let q = noise.variances(ctx.step.dt);
         let [o_healthy, o_internal, o_external, o_both] = out;
-        [
-            step_into(&mut self.healthy, plant, ctx, &q, m, o_healthy),
-            step_into(&mut self.internal, plant, ctx, &q, m, o_internal),
-            step_into(&mut self.external, plant, ctx, &q, m, o_external),
-            step_into(&mut self.both, plant, ctx, &q, m, o_both),
-        ]
+        step_into(&mut self.healthy, plant, ctx, &q, m, o_healthy);
+        step_into(&mut self.internal, plant, ctx, &q, m, o_internal);
+        step_into(&mut self.external, plant, ctx, &q, m, o_external);
+        step_into(&mut self.both, plant, ctx, &q, m, o_both);
     }
 
     /// Restart hypothesis `h`'s filter at plant state `s0`.

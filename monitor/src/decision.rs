@@ -123,7 +123,9 @@ impl<T: Real> Decision<T> {
     }
 
     /// Take one sample's filter outputs (`None`: that filter was reset).
-    /// `valid`: the sample counts as evidence. Returns health flags.
+    /// `valid`: the sample counts as evidence. Returns
+    /// `health::EVIDENCE_PAUSED` when it did not count (or counted for
+    /// little), else 0; the decision's own flags are [`flags`](Self::flags).
     pub fn update(
         &mut self,
         out: &[Option<FilterOutput<T>>; 4],
@@ -154,7 +156,7 @@ impl<T: Real> Decision<T> {
             }
         }
         if !valid {
-            return health::EVIDENCE_PAUSED | self.flags();
+            return health::EVIDENCE_PAUSED;
         }
         self.update_probabilities(out, dt_w, weight, a_evidence);
 
@@ -173,12 +175,7 @@ impl<T: Real> Decision<T> {
             }
         }
         if new_leak[0] || new_leak[1] {
-            let found = match (self.raised[0], self.raised[1]) {
-                (true, true) => Verdict::Both,
-                (true, false) => Verdict::Internal,
-                (false, true) => Verdict::External,
-                (false, false) => Verdict::Healthy,
-            };
+            let found = Verdict::from_leaks(self.raised[0], self.raised[1]);
             let merged = merge(self.latched, found);
             if merged != self.latched {
                 self.latched = merged;
@@ -190,12 +187,11 @@ impl<T: Real> Decision<T> {
         self.warning = !self.latched.is_leak()
             && (level >= self.warning_lpm || (self.warning && level >= off));
         self.mismatch = self.nis[self.leading as usize] > T::c(MISMATCH_NIS);
-        let paused = if weight < T::c(0.5) {
+        if weight < T::c(0.5) {
             health::EVIDENCE_PAUSED
         } else {
             0
-        };
-        self.flags() | paused
+        }
     }
 
     /// Do the model probabilities support leak `k` (0 internal, 1 external)?
@@ -319,10 +315,5 @@ fn merge(a: Verdict, b: Verdict) -> Verdict {
         || matches!(b, Verdict::Internal | Verdict::Both);
     let external = matches!(a, Verdict::External | Verdict::Both)
         || matches!(b, Verdict::External | Verdict::Both);
-    match (internal, external) {
-        (true, true) => Verdict::Both,
-        (true, false) => Verdict::Internal,
-        (false, true) => Verdict::External,
-        (false, false) => Verdict::Healthy,
-    }
+    Verdict::from_leaks(internal, external)
 }

@@ -134,16 +134,6 @@ impl<T: Real, const N: usize> Ekf<T, N> {
             Err(EkfError::NonFinite)
         }
     }
-
-    /// Smallest diagonal entry of P (a cheap PSD sanity check; tests check
-    /// eigenvalues on the host).
-    pub fn min_variance(&self) -> T {
-        let mut m = self.p[(0, 0)];
-        for i in 1..N {
-            m = m.min(self.p[(i, i)]);
-        }
-        m
-    }
 }
 
 /// Joseph-form covariance update for a reading of state j (h = e_j), gain

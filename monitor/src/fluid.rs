@@ -1,10 +1,10 @@
 //! Oil properties: pressure-dependent effective bulk modulus and the
 //! temperature dependence of laminar leakage.
 
+use crate::model::BAR;
 use crate::params::Fluid;
 use crate::real::Real;
 
-const BAR: f64 = 1e5;
 const INTERVALS: usize = 64;
 const NODES: usize = INTERVALS + 1;
 /// Lowest absolute pressure of the table, Pa (near vacuum).

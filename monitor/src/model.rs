@@ -443,7 +443,8 @@ impl<T: Real> Plant<T> {
     }
 
     /// The full Jacobian ∂f/∂[s, gain_ext, gain_ret, laminar, θ_i, θ_e] as a dense 11×11
-    /// array (tests, calibration; the filter uses the sparse form).
+    /// array (the finite-difference test's; the filter uses the sparse form).
+    #[cfg(test)]
     pub fn dense_jacobian(&self, e: &Eval<T>) -> [[T; NX + 5]; NX + 5] {
         let j = &e.jac;
         let mut a = [[T::ZERO; NX + 5]; NX + 5];

@@ -4,7 +4,6 @@
 
 use crate::bank::{Bank, BankOutput, Measurement, ProcessNoise, StepContext, NB, NZ};
 use crate::decision::Decision;
-use crate::ekf::EkfError;
 use crate::fluid::laminar_flow_factor;
 use crate::hypothesis::Hypothesis;
 use crate::model::{Inputs, Plant, Step, BAR, GAIN_REF, LAMINAR_REF, NX, P_REF, X_REF};
@@ -49,7 +48,10 @@ pub struct Monitor<T: Real = f32> {
     spool_dt_tol_s: f64,
     spool_sub: SpoolStep<T>,
     spool_dt: SpoolStep<T>,
+    /// Time since the filters (re)started, s, counted only until the
+    /// warm-up is over (an f64 add and compare the MCU emulates in software).
     since_start_s: f64,
+    warming: bool,
     decision: Decision<T>,
     temp_c: Option<f32>,
     laminar_factor: T,
@@ -117,6 +119,7 @@ impl<T: Real> Monitor<T> {
             bank: None,
             last_t: None,
             since_start_s: 0.0,
+            warming: true,
             decision: Decision::new(params),
             temp_c: None,
             laminar_factor: T::ONE,
@@ -193,9 +196,10 @@ impl<T: Real> Monitor<T> {
         };
         let held = self.held.replace(now).unwrap_or(now);
         let Some(bank) = self.bank.as_mut() else {
-            let s0 = initial_state(&c);
+            let s0 = initial_state(&m, c.u_valve);
             self.bank = Some(Bank::new(&s0, &self.cfg.p0, self.cfg.leak_prior_sd));
             self.since_start_s = 0.0;
+            self.warming = true;
             self.decision.restart();
             self.quiet.restart();
             return self.status(
@@ -239,19 +243,15 @@ impl<T: Real> Monitor<T> {
             },
         };
         let mut ok: BankOutput<T> = [None; 4];
-        let results = bank.step(&self.plant, &ctx, &self.cfg.noise, &m, &mut ok);
-        for (i, result) in results.into_iter().enumerate() {
-            match result {
-                Ok(()) => {}
-                Err(EkfError::InnovationCovariance { .. }) | Err(EkfError::NonFinite) => {
-                    let h = Hypothesis::ALL[i];
-                    // Restart the failed filter from the healthy filter's
-                    // (or the readings') plant state.
-                    let s0 = initial_state(&c);
-                    bank.reset(h, &s0, &self.cfg.p0, self.cfg.leak_prior_sd);
-                    flags |= health::FILTER_RESET;
-                    let _ = events.push(Event::FilterReset(h));
-                }
+        bank.step(&self.plant, &ctx, &self.cfg.noise, &m, &mut ok);
+        for (h, out) in Hypothesis::ALL.into_iter().zip(&ok) {
+            if out.is_none() {
+                // The filter failed numerically: restart it from the
+                // readings.
+                let s0 = initial_state(&m, c.u_valve);
+                bank.reset(h, &s0, &self.cfg.p0, self.cfg.leak_prior_sd);
+                flags |= health::FILTER_RESET;
+                let _ = events.push(Event::FilterReset(h));
             }
         }
         if let Some(h) = &ok[0] {
@@ -265,8 +265,11 @@ impl<T: Real> Monitor<T> {
                 T::c(dt),
             );
         }
-        self.since_start_s += dt;
-        let warming = self.since_start_s < self.cfg.warm_up_s;
+        if self.warming {
+            self.since_start_s += dt;
+            self.warming = self.since_start_s < self.cfg.warm_up_s;
+        }
+        let warming = self.warming;
         if warming {
             flags |= health::WARMING_UP;
         }
@@ -340,30 +343,9 @@ impl<T: Real> Monitor<T> {
         }
     }
 
-    /// Plant state estimate of hypothesis `h` in SI units
-    /// `[x_p m, ẋ_p m/s, x_v, ẋ_v 1/s, p3 Pa, p4 Pa]`, if running.
-    pub fn plant_state_si(&self, h: Hypothesis) -> Option<[f64; NX]> {
-        let b = self.bank.as_ref()?;
-        let s = b.plant_state(h);
-        let omega = self.plant.omega.to_f64();
-        Some([
-            s[0].to_f64() * X_REF,
-            s[1].to_f64() * crate::model::V_REF,
-            s[2].to_f64(),
-            s[3].to_f64() * omega,
-            s[4].to_f64() * P_REF,
-            s[5].to_f64() * P_REF,
-        ])
-    }
-
     /// The filter bank, if running (for diagnostics and tests).
     pub fn bank(&self) -> Option<&Bank<T>> {
         self.bank.as_ref()
-    }
-
-    /// Channel the checker considers faulted right now.
-    pub fn faulted(&self, ch: Channel) -> bool {
-        self.checker.faulted() & ch.bit() != 0
     }
 }
 
@@ -381,13 +363,7 @@ struct HeldInputs {
 
 /// Filter start: position and pressures from the readings, at rest, spool
 /// at the command.
-fn initial_state<T: Real>(c: &Conditioned) -> [T; NX] {
-    [
-        T::from_f32(c.x_piston_m) / T::c(X_REF),
-        T::ZERO,
-        T::from_f32(c.u_valve),
-        T::ZERO,
-        T::from_f32(c.p_piston_bar) * T::c(BAR / P_REF),
-        T::from_f32(c.p_rod_bar) * T::c(BAR / P_REF),
-    ]
+fn initial_state<T: Real>(m: &Measurement<T>, u_valve: f32) -> [T; NX] {
+    let [x, p3, p4] = m.z;
+    [x, T::ZERO, T::from_f32(u_valve), T::ZERO, p3, p4]
 }

@@ -217,8 +217,9 @@ params_struct! {
 }
 
 params_struct! {
-    /// EKF tuning, in the filter's scaled units (see `model::Scale`):
-    /// process-noise intensities are per second.
+    /// EKF tuning, in the filter's scaled units (the reference scales
+    /// `X_REF`, `P_REF`, `GAIN_REF`, `LAMINAR_REF` in `model`): process-noise
+    /// intensities are per second.
     pub struct FilterTuning {
         /// Integration substeps per sample for the state prediction.
         pub substeps: u32 = 2,
@@ -343,7 +344,7 @@ impl Params {
     /// Check that every value is finite and physically meaningful. Returns
     /// the first offending field's name.
     pub fn validate(&self) -> Result<(), ParamError> {
-        let positive: [(&'static str, f64); 20] = [
+        let positive: [(&'static str, f64); 29] = [
             ("cylinder.piston_area_m2", self.cylinder.piston_area_m2),
             ("cylinder.rod_side_area_m2", self.cylinder.rod_side_area_m2),
             ("cylinder.stroke_m", self.cylinder.stroke_m),
@@ -391,6 +392,24 @@ impl Params {
                 self.sensors.pressure_noise_bar,
             ),
             ("sensors.position_noise_m", self.sensors.position_noise_m),
+            ("filter.leak_prior_lpm", self.filter.leak_prior_lpm),
+            ("filter.quiet_flow_lpm", self.filter.quiet_flow_lpm),
+            (
+                "filter.gain_learning_flow_lpm",
+                self.filter.gain_learning_flow_lpm,
+            ),
+            ("filter.evidence_window_s", self.filter.evidence_window_s),
+            ("filter.detection_window_s", self.filter.detection_window_s),
+            (
+                "filter.residual_correlation_samples",
+                self.filter.residual_correlation_samples,
+            ),
+            (
+                "filter.complexity_penalty_per_s",
+                self.filter.complexity_penalty_per_s,
+            ),
+            ("filter.sample_period_s", self.filter.sample_period_s),
+            ("alarm.alarm_lpm", self.alarm.alarm_lpm),
         ];
         for (name, v) in positive {
             if !(v.is_finite() && v > 0.0) {
@@ -400,7 +419,7 @@ impl Params {
                 });
             }
         }
-        let non_negative: [(&'static str, f64); 18] = [
+        let non_negative: [(&'static str, f64); 21] = [
             ("valve.dead_zone", self.valve.dead_zone),
             (
                 "valve.edge_leak_lpm_per_bar",
@@ -425,6 +444,9 @@ impl Params {
             ("filter.q_leak", self.filter.q_leak),
             ("filter.q_laminar", self.filter.q_laminar),
             ("filter.laminar_prior", self.filter.laminar_prior),
+            ("filter.q_gain", self.filter.q_gain),
+            ("filter.gain_prior", self.filter.gain_prior),
+            ("filter.warm_up_s", self.filter.warm_up_s),
         ];
         for (name, v) in non_negative {
             if !(v.is_finite() && v >= 0.0) {
@@ -482,34 +504,6 @@ impl Params {
                 field: "filter.substeps",
                 problem: "must be 1..=16",
             });
-        }
-        let pos: [(&'static str, f64); 9] = [
-            ("filter.leak_prior_lpm", self.filter.leak_prior_lpm),
-            ("filter.quiet_flow_lpm", self.filter.quiet_flow_lpm),
-            (
-                "filter.gain_learning_flow_lpm",
-                self.filter.gain_learning_flow_lpm,
-            ),
-            ("filter.evidence_window_s", self.filter.evidence_window_s),
-            ("filter.detection_window_s", self.filter.detection_window_s),
-            (
-                "filter.residual_correlation_samples",
-                self.filter.residual_correlation_samples,
-            ),
-            (
-                "filter.complexity_penalty_per_s",
-                self.filter.complexity_penalty_per_s,
-            ),
-            ("filter.sample_period_s", self.filter.sample_period_s),
-            ("alarm.alarm_lpm", self.alarm.alarm_lpm),
-        ];
-        for (name, v) in pos {
-            if !(v.is_finite() && v > 0.0) {
-                return Err(ParamError {
-                    field: name,
-                    problem: "must be a finite number > 0",
-                });
-            }
         }
         if !(self.alarm.warning_lpm.is_finite()
             && self.alarm.warning_lpm > 0.0

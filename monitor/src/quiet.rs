@@ -49,6 +49,10 @@ pub struct Quietness<T> {
     rates: [T; 3],
     transient: T,
     flow_lpm: T,
+    /// `weight()` and `gain_weight()`, refreshed whenever their inputs
+    /// change (they are read several times a step).
+    weight: T,
+    gain_weight: T,
 }
 
 impl<T: Real> Quietness<T> {
@@ -71,7 +75,20 @@ impl<T: Real> Quietness<T> {
             rates: [T::ZERO; 3],
             transient: T::ZERO,
             flow_lpm: T::ZERO,
+            weight: T::ZERO,
+            gain_weight: T::ZERO,
         }
+        .refreshed()
+    }
+
+    fn refreshed(mut self) -> Self {
+        self.refresh();
+        self
+    }
+
+    fn refresh(&mut self) {
+        self.weight = self.compute_weight();
+        self.gain_weight = self.compute_gain_weight();
     }
 
     /// Forget everything (filters restarted): weights 0, rising.
@@ -79,11 +96,21 @@ impl<T: Real> Quietness<T> {
         self.last = None;
         self.rates = [T::ZERO; 3];
         self.transient = T::ZERO;
+        self.refresh();
     }
 
     /// The evidence weight w: how much the current sample counts as leak
     /// evidence, and the learning weight of the leak states.
     pub fn weight(&self) -> T {
+        self.weight
+    }
+
+    /// The learning weight of the valve flow-gain states.
+    pub fn gain_weight(&self) -> T {
+        self.gain_weight
+    }
+
+    fn compute_weight(&self) -> T {
         if !(self.rate_ref_bar_s > T::ZERO) {
             return T::ONE;
         }
@@ -91,8 +118,7 @@ impl<T: Real> Quietness<T> {
         self.transient / (T::ONE + q * q)
     }
 
-    /// The learning weight of the valve flow-gain states.
-    pub fn gain_weight(&self) -> T {
+    fn compute_gain_weight(&self) -> T {
         let q2 = self.flow_lpm * self.flow_lpm;
         let transient = if self.rate_ref_bar_s > T::ZERO {
             self.transient
@@ -114,6 +140,7 @@ impl<T: Real> Quietness<T> {
     ) -> T {
         self.flow_lpm = valve_flow_lpm.abs();
         if !(self.rate_ref_bar_s > T::ZERO) {
+            self.refresh();
             return T::ONE;
         }
         let now = [p_piston_bar, p_rod_bar, command];
@@ -131,7 +158,8 @@ impl<T: Real> Quietness<T> {
         let recovered =
             self.transient + (T::ONE - self.transient) * (dt / self.recovery_s).min(T::ONE);
         self.transient = instant.min(recovered);
-        self.weight()
+        self.refresh();
+        self.weight
     }
 }
 

@@ -82,11 +82,6 @@ impl SampleChecker {
         }
     }
 
-    /// Channels faulted at the last sample.
-    pub fn faulted(&self) -> u8 {
-        self.faulted
-    }
-
     /// Condition `s`, pushing fault and recovery events. `dt_s` is the
     /// time since the previous sample on the monitor's clock (0 for the
     /// first sample and for one it ignores), for the frozen-reading test.

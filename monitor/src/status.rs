@@ -31,13 +31,13 @@ impl Verdict {
         }
     }
 
-    /// The leak verdict of a hypothesis.
-    pub const fn from_hypothesis(h: Hypothesis) -> Self {
-        match h {
-            Hypothesis::Healthy => Self::Healthy,
-            Hypothesis::Internal => Self::Internal,
-            Hypothesis::External => Self::External,
-            Hypothesis::Both => Self::Both,
+    /// The leak verdict for an internal and/or an external leak.
+    pub const fn from_leaks(internal: bool, external: bool) -> Self {
+        match (internal, external) {
+            (true, true) => Self::Both,
+            (true, false) => Self::Internal,
+            (false, true) => Self::External,
+            (false, false) => Self::Healthy,
         }
     }
 
