@@ -13,6 +13,8 @@
 //! command frame), which also clears the monitor's latch. If the leak is
 //! still there, the monitor raises it again after its debounce time.
 
+use crate::monitor::Monitor;
+use crate::real::Real;
 use crate::status::{health, Status, Verdict};
 
 /// What the alarm output shows, in precedence order (low to high).
@@ -226,11 +228,12 @@ impl AlarmLogic {
         )
     }
 
-    /// Operator acknowledgement: clears the latched leak. Returns true
-    /// when one was latched; the caller must then clear the monitor's
-    /// latch too (`Monitor::clear_alarm`). The shown state follows at the
-    /// next [`update`](Self::update).
-    pub fn acknowledge(&mut self) -> bool {
+    /// Operator acknowledgement: clears the latched leak here and in the
+    /// monitor's decision (which raises it again if the evidence still
+    /// holds for the debounce time). Returns true when one was latched.
+    /// The shown state follows at the next [`update`](Self::update).
+    pub fn acknowledge<T: Real>(&mut self, monitor: &mut Monitor<T>) -> bool {
+        monitor.clear_alarm();
         let was = self.out.latched != LeakKind::None;
         self.out.latched = LeakKind::None;
         was
@@ -272,6 +275,11 @@ mod tests {
         s
     }
 
+    /// A monitor whose latch the acknowledgement clears too.
+    fn monitor() -> Monitor<f32> {
+        Monitor::new(&crate::params::Params::nominal()).unwrap()
+    }
+
     fn healthy() -> Status {
         status(Verdict::Healthy, 0, 0)
     }
@@ -306,8 +314,11 @@ mod tests {
         assert!(a.update(&status(Verdict::External, health::ALARM_LATCHED, 0), 7));
         assert_eq!(a.output().latched, LeakKind::Both);
         // Acknowledge: cleared, relay back on at the next healthy sample.
-        assert!(a.acknowledge());
-        assert!(!a.acknowledge(), "nothing left to acknowledge");
+        assert!(a.acknowledge(&mut monitor()));
+        assert!(
+            !a.acknowledge(&mut monitor()),
+            "nothing left to acknowledge"
+        );
         assert!(a.update(&healthy(), 8));
         assert_eq!(a.output().state, AlarmState::Healthy);
         assert!(a.output().relay_energised());
@@ -317,7 +328,7 @@ mod tests {
     fn an_acknowledged_leak_that_persists_is_raised_again() {
         let mut a = AlarmLogic::new();
         a.update(&status(Verdict::Both, health::ALARM_LATCHED, 0), 0);
-        assert!(a.acknowledge());
+        assert!(a.acknowledge(&mut monitor()));
         // The monitor still reports the leak (it re-raised it): latched again.
         a.update(&status(Verdict::Both, health::ALARM_LATCHED, 0), 1);
         assert_eq!(a.output().state, AlarmState::Leak);

@@ -106,8 +106,7 @@ fn run(input: &Input<'_>, codes: &[[u16; 7]], frontend: FrontendConfig, ack: Opt
         let t_ms = clock.t_ms(index);
         let acquired = frontend.convert(clock.t_s(index), &average_scans(&block(sums)));
         if ack == Some(k) {
-            alarm.acknowledge();
-            monitor.clear_alarm();
+            alarm.acknowledge(&mut monitor);
         }
         let status = monitor.step(&acquired.sample);
         for e in &status.events {

@@ -47,15 +47,20 @@ pub async fn run<S: SampleSource, R: RelayOutput, C: CycleCounter>(
             }
         };
         let start = cycles.cycles();
-        let now = Instant::now();
-        let t0 = *first_block.get_or_insert_with(|| {
+        // The sample clock counts samples; the timer is read only to date
+        // the first block and to resynchronise after an overrun.
+        let first = first_block.is_none();
+        if first {
+            let now = Instant::now();
             shared
                 .first_sample_ms
                 .store(now.as_millis() as u32, Ordering::Release);
-            now
-        });
+            first_block = Some(now);
+        }
         let lost = core::mem::take(&mut overran).then(|| {
-            let lost = clock.resync(now.duration_since(t0).as_micros());
+            let since_first =
+                first_block.map_or(0, |t0| Instant::now().duration_since(t0).as_micros());
+            let lost = clock.resync(since_first);
             deadline.overrun(lost);
             lost
         });
@@ -67,8 +72,7 @@ pub async fn run<S: SampleSource, R: RelayOutput, C: CycleCounter>(
         let acquired = frontend.convert(clock.t_s(index), &average_scans(raw));
 
         if let Some(Command::AcknowledgeAlarm) = shared.commands.try_take() {
-            let was_latched = alarm.acknowledge();
-            monitor.clear_alarm();
+            let was_latched = alarm.acknowledge(monitor);
             shared.log(LogEvent::Acknowledged { t_ms, was_latched });
         }
         let status = monitor.step(&acquired.sample);
@@ -82,19 +86,23 @@ pub async fn run<S: SampleSource, R: RelayOutput, C: CycleCounter>(
         }
         let changed = alarm.update(&status, t_ms as u32);
         let output = alarm.output();
+        // Belt and braces: a stalled estimator's relay stays off whatever
+        // the alarm logic says.
         relay.set_energised(output.relay_energised() && !stalled);
-        shared
-            .alarm_state
-            .store(output.state.code(), Ordering::Relaxed);
-        let alarm_frame = AlarmFrame::from_logic(&alarm);
-        shared.set_last_alarm(alarm_frame);
+        if changed || first {
+            // The frame and the LED state only change with the output.
+            shared
+                .alarm_state
+                .store(output.state.code(), Ordering::Relaxed);
+            shared.set_last_alarm(AlarmFrame::from_logic(&alarm));
+        }
         if changed {
             shared.log(LogEvent::Alarm { t_ms, output });
         }
 
         let due = schedule.due(t_ms, changed);
         if due.alarm {
-            shared.post(Message::Alarm(alarm_frame));
+            shared.post(Message::Alarm(AlarmFrame::from_logic(&alarm)));
         }
         if due.status {
             shared.post(Message::Status(StatusFrame::from_status(&status)));

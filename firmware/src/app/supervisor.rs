@@ -8,7 +8,7 @@ use core::sync::atomic::Ordering;
 
 use embassy_time::{Duration, Instant, Ticker};
 use monitor::alarm::AlarmState;
-use monitor::protocol::{AlarmFrame, Message};
+use monitor::protocol::Message;
 use monitor::supervisor::{Supervision, Supervisor, SupervisorConfig};
 
 use super::shared::{LogEvent, Shared};
@@ -73,12 +73,7 @@ pub async fn run<W: Watchdog, R: RelayOutput, L: StatusLed>(
                         .alarm_state
                         .store(AlarmState::EstimatorStalled.code(), Ordering::Relaxed);
                     if let Some(last) = shared.last_alarm() {
-                        shared.post(Message::Alarm(AlarmFrame {
-                            state: AlarmState::EstimatorStalled,
-                            relay_energised: false,
-                            changed_at_ms: shared.sample_clock_ms(now_ms),
-                            ..last
-                        }));
+                        shared.post(Message::Alarm(last.stalled(shared.sample_clock_ms(now_ms))));
                     }
                     defmt::error!(
                         "estimator stalled after {} samples: relay off, watchdog no longer fed",

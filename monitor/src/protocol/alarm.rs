@@ -35,6 +35,20 @@ pub struct AlarmFrame {
 }
 
 impl AlarmFrame {
+    /// This frame as the supervisor reports a stalled estimator at
+    /// `changed_at_ms` (the estimator's own alarm logic is the one that
+    /// stopped): state `EstimatorStalled`, relay off, latch and faults as
+    /// last reported.
+    pub fn stalled(self, changed_at_ms: u32) -> Self {
+        let state = AlarmState::EstimatorStalled;
+        Self {
+            state,
+            relay_energised: state.relay_energised(),
+            changed_at_ms,
+            ..self
+        }
+    }
+
     /// The frame for the alarm logic's current output.
     pub fn from_logic(a: &AlarmLogic) -> Self {
         let out = a.output();
