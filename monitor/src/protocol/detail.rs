@@ -12,8 +12,8 @@
 //! | 4–5 | | ValveGainDevExtend | i16, 0.1 %, −32768 = not available |
 //! | 6–7 | | ValveGainDevRetract | i16, 0.1 %, −32768 = not available |
 
-use super::bytes::{get_u16, put_u16};
-use super::quantize::to_i32;
+use super::bytes::{get_opt_i16, put_opt_i16, I16_NOT_AVAILABLE};
+use super::quantize::{milli_i16, to_i32};
 use super::signal::SignalList;
 use super::{FieldError, Signals};
 use crate::hypothesis::Hypothesis;
@@ -24,7 +24,7 @@ pub const SD_NOT_AVAILABLE: u8 = u8::MAX;
 /// Largest uncertainty on the wire, ml/min (larger values saturate).
 pub const SD_MAX_ML_MIN: u8 = u8::MAX - 1;
 /// Raw value of a valve deviation that is not available.
-pub const GAIN_NOT_AVAILABLE: i16 = i16::MIN;
+pub const GAIN_NOT_AVAILABLE: i16 = I16_NOT_AVAILABLE;
 
 /// The detail frame.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -46,10 +46,6 @@ fn sd_ml_min(lpm: Option<f32>) -> Option<u8> {
     to_i32(lpm, 1e-3, 0, SD_MAX_ML_MIN as i32).map(|v| v as u8)
 }
 
-fn permille(relative: f32) -> Option<i16> {
-    to_i32(Some(relative), 1e-3, -(i16::MAX as i32), i16::MAX as i32).map(|v| v as i16)
-}
-
 impl DetailFrame {
     /// The frame for a monitor status.
     pub fn from_status(s: &Status) -> Self {
@@ -57,8 +53,8 @@ impl DetailFrame {
             leading: s.leading,
             leak_internal_sd_ml_min: sd_ml_min(s.leak_internal_sd_lpm),
             leak_external_sd_ml_min: sd_ml_min(s.leak_external_sd_lpm),
-            valve_gain_extend_permille: permille(s.valve_gain_deviation[0]),
-            valve_gain_retract_permille: permille(s.valve_gain_deviation[1]),
+            valve_gain_extend_permille: milli_i16(Some(s.valve_gain_deviation[0])),
+            valve_gain_retract_permille: milli_i16(Some(s.valve_gain_deviation[1])),
         }
     }
 
@@ -66,25 +62,20 @@ impl DetailFrame {
         d[1] = (self.leading as u8) << 4;
         d[2] = self.leak_internal_sd_ml_min.unwrap_or(SD_NOT_AVAILABLE);
         d[3] = self.leak_external_sd_ml_min.unwrap_or(SD_NOT_AVAILABLE);
-        let gain = |v: Option<i16>| v.unwrap_or(GAIN_NOT_AVAILABLE) as u16;
-        put_u16(d, 4, gain(self.valve_gain_extend_permille));
-        put_u16(d, 6, gain(self.valve_gain_retract_permille));
+        put_opt_i16(d, 4, self.valve_gain_extend_permille);
+        put_opt_i16(d, 6, self.valve_gain_retract_permille);
     }
 
     pub(crate) fn read(d: &[u8; 8]) -> Result<Self, FieldError> {
         // Two bits: every value is a hypothesis.
         let leading = Hypothesis::ALL[((d[1] >> 4) & 0x03) as usize];
         let sd = |v: u8| (v != SD_NOT_AVAILABLE).then_some(v);
-        let gain = |at| match get_u16(d, at) as i16 {
-            GAIN_NOT_AVAILABLE => None,
-            v => Some(v),
-        };
         Ok(Self {
             leading,
             leak_internal_sd_ml_min: sd(d[2]),
             leak_external_sd_ml_min: sd(d[3]),
-            valve_gain_extend_permille: gain(4),
-            valve_gain_retract_permille: gain(6),
+            valve_gain_extend_permille: get_opt_i16(d, 4),
+            valve_gain_retract_permille: get_opt_i16(d, 6),
         })
     }
 

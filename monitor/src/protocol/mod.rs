@@ -365,6 +365,22 @@ pub(crate) mod bytes {
         d[at..at + 2].copy_from_slice(&v.to_le_bytes());
     }
 
+    /// The i16 code that means "not available".
+    pub const I16_NOT_AVAILABLE: i16 = i16::MIN;
+
+    /// Optional i16 at byte `at` (`I16_NOT_AVAILABLE` is `None`).
+    pub fn get_opt_i16(d: &[u8; 8], at: usize) -> Option<i16> {
+        match get_u16(d, at) as i16 {
+            I16_NOT_AVAILABLE => None,
+            v => Some(v),
+        }
+    }
+
+    /// Write an optional i16 at byte `at` (`None` as `I16_NOT_AVAILABLE`).
+    pub fn put_opt_i16(d: &mut [u8; 8], at: usize, v: Option<i16>) {
+        put_u16(d, at, v.unwrap_or(I16_NOT_AVAILABLE) as u16);
+    }
+
     /// u32 at byte `at`.
     pub fn get_u32(d: &[u8; 8], at: usize) -> u32 {
         u32::from_le_bytes([d[at], d[at + 1], d[at + 2], d[at + 3]])
@@ -379,6 +395,13 @@ pub(crate) mod bytes {
 /// Rounding conversions from the monitor's floating-point values to wire
 /// integers.
 pub(crate) mod quantize {
+    /// `v` in thousandths as an i16 (l/min → ml/min, relative → ‰),
+    /// rounded and saturated to ±`i16::MAX` (`i16::MIN` is reserved for
+    /// "not available").
+    pub fn milli_i16(v: Option<f32>) -> Option<i16> {
+        to_i32(v, 1e-3, -(i16::MAX as i32), i16::MAX as i32).map(|v| v as i16)
+    }
+
     /// `v / step` rounded to the nearest integer and saturated to
     /// `[lo, hi]`; `None` for NaN or a missing value.
     pub fn to_i32(v: Option<f32>, step: f32, lo: i32, hi: i32) -> Option<i32> {

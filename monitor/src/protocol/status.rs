@@ -10,14 +10,14 @@
 //! | 4–5 | | LeakExternal | i16, 0.001 l/min, −32768 = not available |
 //! | 6–7 | | Health | `status::health` bit mask |
 
-use super::bytes::{get_u16, put_u16};
-use super::quantize::to_i32;
+use super::bytes::{get_opt_i16, get_u16, put_opt_i16, put_u16, I16_NOT_AVAILABLE};
+use super::quantize::milli_i16;
 use super::signal::SignalList;
 use super::{FieldError, Signals};
 use crate::status::{Status, Verdict};
 
 /// Raw value of a leak flow that is not available.
-pub const FLOW_NOT_AVAILABLE: i16 = i16::MIN;
+pub const FLOW_NOT_AVAILABLE: i16 = I16_NOT_AVAILABLE;
 
 /// The status frame.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -32,11 +32,6 @@ pub struct StatusFrame {
     pub leak_external_ml_min: Option<i16>,
     /// Health flags (`status::health::*`).
     pub health: u16,
-}
-
-/// A leak flow in l/min as ml/min on the wire (rounded, saturated).
-pub(crate) fn flow_ml_min(lpm: Option<f32>) -> Option<i16> {
-    to_i32(lpm, 1e-3, -(i16::MAX as i32), i16::MAX as i32).map(|v| v as i16)
 }
 
 /// Verdict of a wire code.
@@ -57,24 +52,16 @@ impl StatusFrame {
     pub fn from_status(s: &Status) -> Self {
         Self {
             verdict: s.verdict,
-            leak_internal_ml_min: flow_ml_min(s.leak_internal_lpm),
-            leak_external_ml_min: flow_ml_min(s.leak_external_lpm),
+            leak_internal_ml_min: milli_i16(s.leak_internal_lpm),
+            leak_external_ml_min: milli_i16(s.leak_external_lpm),
             health: s.health,
         }
     }
 
     pub(crate) fn write(&self, d: &mut [u8; 8]) {
         d[1] = (self.verdict as u8) << 4;
-        put_u16(
-            d,
-            2,
-            self.leak_internal_ml_min.unwrap_or(FLOW_NOT_AVAILABLE) as u16,
-        );
-        put_u16(
-            d,
-            4,
-            self.leak_external_ml_min.unwrap_or(FLOW_NOT_AVAILABLE) as u16,
-        );
+        put_opt_i16(d, 2, self.leak_internal_ml_min);
+        put_opt_i16(d, 4, self.leak_external_ml_min);
         put_u16(d, 6, self.health);
     }
 
@@ -84,14 +71,10 @@ impl StatusFrame {
             field: "Verdict",
             raw: code as u32,
         })?;
-        let flow = |at| match get_u16(d, at) as i16 {
-            FLOW_NOT_AVAILABLE => None,
-            v => Some(v),
-        };
         Ok(Self {
             verdict,
-            leak_internal_ml_min: flow(2),
-            leak_external_ml_min: flow(4),
+            leak_internal_ml_min: get_opt_i16(d, 2),
+            leak_external_ml_min: get_opt_i16(d, 4),
             health: get_u16(d, 6),
         })
     }
