@@ -196,6 +196,23 @@ params_struct! {
 }
 
 params_struct! {
+    /// The healthy installation's repeatable model error, learned by
+    /// calibration per operating region: what the `both` filter's leak
+    /// coefficients read on the leak-free installation. The decision layer
+    /// subtracts it before it compares a leak with the thresholds. Regions
+    /// by the valve command u: retracting (u < null − dead zone), holding
+    /// (|u − null| ≤ dead zone), extending (u > null + dead zone).
+    pub struct Baseline {
+        /// Apparent internal leak coefficient per region `[retracting,
+        /// holding, extending]`, l/min at 10 bar across the piston.
+        pub internal_lpm_per_10bar: [f64; 3] = [0.0; 3],
+        /// Apparent external leak coefficient per region, l/min at 10 bar
+        /// from the rod side to tank.
+        pub external_lpm_per_10bar: [f64; 3] = [0.0; 3],
+    }
+}
+
+params_struct! {
     /// The measurement chain.
     pub struct Sensors {
         /// White noise on each pressure reading, bar (1σ).
@@ -314,6 +331,8 @@ pub struct Params {
     pub friction: Friction,
     /// Healthy leakage.
     pub leakage: Leakage,
+    /// The healthy installation's apparent leaks per operating region.
+    pub baseline: Baseline,
     /// Sensors.
     pub sensors: Sensors,
     /// Filter tuning.
@@ -331,6 +350,7 @@ impl Params {
         fluid: Fluid::NOMINAL,
         friction: Friction::NOMINAL,
         leakage: Leakage::NOMINAL,
+        baseline: Baseline::NOMINAL,
         sensors: Sensors::NOMINAL,
         filter: FilterTuning::NOMINAL,
         alarm: AlarmConfig::NOMINAL,
@@ -532,6 +552,23 @@ impl Params {
                 field: "sensors.pressure_range_bar",
                 problem: "must be [low, high] with low < high",
             });
+        }
+        for (name, arr) in [
+            (
+                "baseline.internal_lpm_per_10bar",
+                &self.baseline.internal_lpm_per_10bar,
+            ),
+            (
+                "baseline.external_lpm_per_10bar",
+                &self.baseline.external_lpm_per_10bar,
+            ),
+        ] {
+            if arr.iter().any(|v| !(v.is_finite() && v.abs() < 1.0)) {
+                return Err(ParamError {
+                    field: name,
+                    problem: "entries must be finite and within ±1 l/min at 10 bar",
+                });
+            }
         }
         for (name, arr) in [
             ("load.masses_kg", &self.load.masses_kg),
