@@ -15,12 +15,13 @@ use monitor::{Hypothesis, Verdict};
 use std::collections::BTreeMap;
 use std::io::Write;
 
-const VERDICTS: [Verdict; 5] = [
+const VERDICTS: [Verdict; 6] = [
     Verdict::Healthy,
     Verdict::Internal,
     Verdict::External,
     Verdict::Both,
     Verdict::SensorFault,
+    Verdict::Inconclusive,
 ];
 
 fn messages() -> Vec<Message> {
@@ -36,13 +37,13 @@ fn messages() -> Vec<Message> {
             }
         };
         v.push(Message::Status(StatusFrame {
-            verdict: VERDICTS[i as usize % 5],
+            verdict: VERDICTS[i as usize % 6],
             leak_internal_ml_min: flow(0),
             leak_external_ml_min: flow(3),
             health: (0x1357u32.wrapping_mul(i as u32 + 1) & 0xFFFF) as u16,
         }));
         v.push(Message::Alarm(AlarmFrame {
-            state: AlarmState::ALL[i as usize % 5],
+            state: AlarmState::ALL[i as usize % 6],
             latched: LeakKind::ALL[i as usize % 4],
             relay_energised: i % 3 == 0,
             faulted_channels: (i as u8).wrapping_mul(37),

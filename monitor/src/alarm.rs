@@ -5,7 +5,9 @@
 //! filters' warm-up, on a latched leak alarm, on a sensor fault and after
 //! the estimator stalled it is de-energised (and a dead board, a reset or
 //! a missing supply de-energise it too). Precedence, highest first:
-//! estimator stalled > sensor fault > latched leak > starting > healthy.
+//! estimator stalled > sensor fault > latched leak > starting >
+//! inconclusive > healthy. `Inconclusive` keeps the relay off like the
+//! warm-up: the relay's "healthy" is a claim backed by evidence.
 //!
 //! Leak alarms latch here as well as in the monitor: once raised, the leak
 //! kind stays latched — through sensor faults and filter restarts — until
@@ -32,16 +34,21 @@ pub enum AlarmState {
     /// The estimator stopped keeping its deadline. Relay off; the
     /// watchdog resets the board.
     EstimatorStalled = 4,
+    /// Running, but the monitor has not seen enough valid evidence to
+    /// claim healthy (time not advancing, filters resetting, model misfit,
+    /// too little quasi-steady operation). Relay off, like the warm-up.
+    Inconclusive = 5,
 }
 
 impl AlarmState {
     /// Every state, in wire-code order.
-    pub const ALL: [AlarmState; 5] = [
+    pub const ALL: [AlarmState; 6] = [
         Self::Starting,
         Self::Healthy,
         Self::Leak,
         Self::SensorFault,
         Self::EstimatorStalled,
+        Self::Inconclusive,
     ];
 
     /// Wire code (CAN alarm frame).
@@ -62,6 +69,7 @@ impl AlarmState {
             Self::Leak => "leak",
             Self::SensorFault => "sensor_fault",
             Self::EstimatorStalled => "estimator_stalled",
+            Self::Inconclusive => "inconclusive",
         }
     }
 
@@ -76,7 +84,7 @@ impl AlarmState {
     pub const fn led_on(self, t_ms: u32) -> bool {
         match self {
             Self::Healthy => t_ms % 1000 < 50,
-            Self::Starting => t_ms % 1000 < 500,
+            Self::Starting | Self::Inconclusive => t_ms % 1000 < 500,
             Self::Leak => true,
             Self::SensorFault => t_ms % 200 < 100,
             Self::EstimatorStalled => false,
@@ -129,7 +137,7 @@ impl LeakKind {
             Verdict::Internal => Self::Internal,
             Verdict::External => Self::External,
             Verdict::Both => Self::Both,
-            Verdict::Healthy | Verdict::SensorFault => Self::None,
+            Verdict::Healthy | Verdict::SensorFault | Verdict::Inconclusive => Self::None,
         }
     }
 
@@ -215,6 +223,8 @@ impl AlarmLogic {
             AlarmState::Leak
         } else if status.health & health::WARMING_UP != 0 {
             AlarmState::Starting
+        } else if status.verdict == Verdict::Inconclusive {
+            AlarmState::Inconclusive
         } else {
             AlarmState::Healthy
         };
@@ -378,7 +388,7 @@ mod tests {
         for s in AlarmState::ALL {
             assert_eq!(AlarmState::from_code(s.code()), Some(s));
         }
-        assert_eq!(AlarmState::from_code(5), None);
+        assert_eq!(AlarmState::from_code(6), None);
         for k in LeakKind::ALL {
             assert_eq!(LeakKind::from_code(k.code()), Some(k));
         }

@@ -61,6 +61,14 @@ pub struct FilterOutput<T> {
     pub flow_internal_sd_lpm: T,
     /// 1σ of the external leak flow, l/min.
     pub flow_external_sd_lpm: T,
+    /// Pressure differences across the internal and external leak paths,
+    /// in units of 10 bar (flow = coefficient × this).
+    pub dp_10bar: [T; 2],
+    /// Per reading (x_p, p3, p4): the squared innovation and its predicted
+    /// variance's share from the state uncertainty (HPHᵀ), scaled units.
+    pub innovation_sq: [T; 3],
+    /// HPHᵀ per reading, scaled units.
+    pub predicted_var: [T; 3],
     /// Valve flow-gain deviation estimates (extend, retract), relative
     /// (0.05 = 5 % more flow than parameterised).
     pub valve_gain: [T; 2],
@@ -76,6 +84,10 @@ struct Innovations<T> {
     nis: T,
     /// Product of the innovation variances (det S).
     det: T,
+    /// Per reading: ν².
+    innovation_sq: [T; 3],
+    /// Per reading: the innovation variance less the reading's noise.
+    predicted_var: [T; 3],
 }
 
 /// Per-step settings shared by the filters.
@@ -95,6 +107,12 @@ pub struct StepContext<T> {
     /// Learning weight of the valve flow-gain states (0 at holds and during
     /// transients).
     pub gain_learning: T,
+    /// Lowest value of each leak coefficient (internal, external), in the
+    /// filter's unit (l/min at 10 bar): minus the installation's healthy
+    /// leakage, so that the total leak never flows backwards.
+    pub leak_floor: [T; 2],
+    /// Stroke, in the scaled position unit: the end stops.
+    pub stroke: T,
 }
 
 /// Process-noise intensities per scaled state, per second.
@@ -190,9 +208,32 @@ impl<T: Real, const N: usize> HypothesisFilter<T, N> {
         let phi = Transition::new(&e, ctx.step.dt, &ctx.spool_dt, self.hypothesis);
         phi.predict_covariance(&mut self.ekf.p, q);
         let inn = self.update(ctx, m, &e)?;
+        self.project(ctx);
         // Once per step, after everything that could go wrong.
         self.ekf.check_finite()?;
         Ok(self.output(ctx, &e, &inn))
+    }
+
+    /// Project the estimate onto what is physically possible: a leak
+    /// coefficient not below its floor (a leak does not run backwards),
+    /// the piston within its end stops and not moving into them. The
+    /// model has no end-stop force; this is it, as a constraint.
+    #[inline(always)]
+    fn project(&mut self, ctx: &StepContext<T>) {
+        let x = &mut self.ekf.x;
+        if let Some(i) = self.hypothesis.internal_index() {
+            x[i] = x[i].max(ctx.leak_floor[0]);
+        }
+        if let Some(i) = self.hypothesis.external_index() {
+            x[i] = x[i].max(ctx.leak_floor[1]);
+        }
+        if x[XP] < T::ZERO {
+            x[XP] = T::ZERO;
+            x[VP] = x[VP].max(T::ZERO);
+        } else if x[XP] > ctx.stroke {
+            x[XP] = ctx.stroke;
+            x[VP] = x[VP].min(T::ZERO);
+        }
     }
 
     /// Advance the plant states through the nonlinear model; returns the
@@ -227,6 +268,8 @@ impl<T: Real, const N: usize> HypothesisFilter<T, N> {
         let mut inn = Innovations {
             nis: T::ZERO,
             det: T::ONE,
+            innovation_sq: [T::ZERO; 3],
+            predicted_var: [T::ZERO; 3],
         };
         // Three calls, not a loop over MEASURED: in a loop the compiler
         // inlined the update and carried P through it on the stack; as
@@ -260,8 +303,11 @@ impl<T: Real, const N: usize> HypothesisFilter<T, N> {
         let u = self
             .ekf
             .update_state_weighted(j, m.z[k], r, k as u8, weights)?;
-        inn.nis += u.innovation * u.innovation / u.variance;
+        let nu2 = u.innovation * u.innovation;
+        inn.nis += nu2 / u.variance;
         inn.det *= u.variance;
+        inn.innovation_sq[k] = nu2;
+        inn.predicted_var[k] = u.variance - r;
         Ok(())
     }
 
@@ -293,6 +339,9 @@ impl<T: Real, const N: usize> HypothesisFilter<T, N> {
             flow_external_lpm: leak_external * dp_ext,
             flow_internal_sd_lpm: leak_internal_sd * dp_int,
             flow_external_sd_lpm: leak_external_sd * dp_ext,
+            dp_10bar: [dp_int, dp_ext],
+            innovation_sq: inn.innovation_sq,
+            predicted_var: inn.predicted_var,
             valve_gain: [self.ekf.x[GAIN_EXT] * gref, self.ekf.x[GAIN_RET] * gref],
             valve_flow_lpm: e.q_valve_a.abs() * T::c(crate::model::LPM_PER_M3S),
         }
@@ -659,6 +708,9 @@ mod tests {
             pressure_lag_s: T::c(params.sensors.pressure_lag_s),
             learning: T::c(0.7),
             gain_learning: T::c(0.4),
+            leak_floor: [T::c(-1.0), T::c(-1.0)],
+            // The dense reference has no end stops: keep them out of reach.
+            stroke: T::c(1.0e3),
         };
         let gain = f.q_gain / 0.01;
         let noise = ProcessNoise {

@@ -27,6 +27,19 @@
 //!    without), each leak state pays a complexity penalty per second of
 //!    evidence. The probabilities are reported, and a leak alarm also needs
 //!    the hypotheses containing that leak to hold `min_probability` jointly.
+//!
+//! 3. **Is there evidence at all?** `healthy` is a claim: it needs
+//!    `min_evidence_s` of evidence-weighted time since the filters
+//!    (re)started, a recent evidence weight (average over
+//!    `evidence_memory_s`) of at least `min_evidence_fraction`, no filter
+//!    reset within the warm-up time, and a model that fits (mean NIS of
+//!    the best filter below [`MISMATCH_NIS`]). Without that the verdict is
+//!    `inconclusive` ([`Decision::conclusive`]).
+//!
+//! The leak flows are the `both` filter's coefficients less the
+//! installation's healthy baseline for the current operating region
+//! (`params::Baseline`), times the pressure difference. Reported sizes
+//! are never negative.
 
 use crate::bank::FilterOutput;
 use crate::hypothesis::Hypothesis;
@@ -66,6 +79,20 @@ pub struct Decision<T> {
     warning_lpm: T,
     debounce_s: T,
     min_probability: T,
+    /// Per leak (internal, external): the healthy baseline coefficient per
+    /// region (retracting, holding, extending), l/min at 10 bar.
+    baseline: [[T; 3]; 2],
+    /// Evidence-weighted time since the filters (re)started, s (capped).
+    evidence_s: T,
+    /// Recent average of the evidence weight (0 while not valid).
+    recent_weight: T,
+    /// Time left until a filter reset no longer makes the verdict
+    /// inconclusive, s.
+    reset_hold_s: T,
+    min_evidence_s: T,
+    evidence_memory_s: T,
+    min_evidence_fraction: T,
+    reset_hold_after_s: T,
 }
 
 impl<T: Real> Decision<T> {
@@ -94,6 +121,17 @@ impl<T: Real> Decision<T> {
             warning_lpm: T::c(params.alarm.warning_lpm),
             debounce_s: T::c(params.alarm.debounce_s),
             min_probability: T::c(params.alarm.min_probability),
+            baseline: [
+                params.baseline.internal_lpm_per_10bar.map(T::c),
+                params.baseline.external_lpm_per_10bar.map(T::c),
+            ],
+            evidence_s: T::ZERO,
+            recent_weight: T::ZERO,
+            reset_hold_s: T::ZERO,
+            min_evidence_s: T::c(f.min_evidence_s),
+            evidence_memory_s: T::c(f.evidence_memory_s),
+            min_evidence_fraction: T::c(f.min_evidence_fraction),
+            reset_hold_after_s: T::c(f.warm_up_s),
         }
     }
 
@@ -110,6 +148,16 @@ impl<T: Real> Decision<T> {
         self.leading = Hypothesis::Healthy;
         self.warning = false;
         self.mismatch = false;
+        self.evidence_s = T::ZERO;
+        self.recent_weight = T::ZERO;
+    }
+
+    /// Has the monitor evaluated enough valid evidence to claim healthy?
+    pub fn conclusive(&self) -> bool {
+        self.evidence_s >= self.min_evidence_s
+            && self.recent_weight >= self.min_evidence_fraction
+            && self.reset_hold_s <= T::ZERO
+            && !self.mismatch
     }
 
     /// Clear a latched alarm; returns whether one was latched. It is raised
@@ -123,17 +171,30 @@ impl<T: Real> Decision<T> {
     }
 
     /// Take one sample's filter outputs (`None`: that filter was reset).
-    /// `valid`: the sample counts as evidence. Returns
-    /// `health::EVIDENCE_PAUSED` when it did not count (or counted for
-    /// little), else 0; the decision's own flags are [`flags`](Self::flags).
+    /// `valid`: the sample counts as evidence. `region`: the operating
+    /// region (0 retracting, 1 holding, 2 extending) for the baseline.
+    /// Returns `health::EVIDENCE_PAUSED` when it did not count (or counted
+    /// for little), else 0; the decision's own flags are
+    /// [`flags`](Self::flags).
     pub fn update(
         &mut self,
         out: &[Option<FilterOutput<T>>; 4],
         dt: T,
         weight: T,
         valid: bool,
+        region: usize,
         events: &mut Events,
     ) -> u16 {
+        if out.iter().any(Option::is_none) {
+            self.reset_hold_s = self.reset_hold_after_s;
+        } else {
+            self.reset_hold_s -= dt;
+        }
+        let counted = if valid { weight } else { T::ZERO };
+        let a_recent = (dt / self.evidence_memory_s).min(T::ONE);
+        self.recent_weight += a_recent * (counted - self.recent_weight);
+        // Capped: it only has to reach `min_evidence_s`.
+        self.evidence_s = (self.evidence_s + dt * counted).min(T::c(1.0e4));
         // Evidence time: a sample counts in proportion to how quasi-steady
         // the plant is (`weight`, the learning weight). During fast moves a
         // small coefficient error times a large pressure difference would
@@ -147,7 +208,10 @@ impl<T: Real> Decision<T> {
         let a_evidence = (dt_w / self.slow_s).min(T::ONE);
         if let Some(both) = &out[Hypothesis::Both as usize] {
             self.valve = both.valve_gain;
-            let flows = [both.flow_internal_lpm, both.flow_external_lpm];
+            let flows = [
+                both.flow_internal_lpm - self.baseline[0][region] * both.dp_10bar[0],
+                both.flow_external_lpm - self.baseline[1][region] * both.dp_10bar[1],
+            ];
             let sds = [both.flow_internal_sd_lpm, both.flow_external_sd_lpm];
             for k in 0..2 {
                 self.fast[k] += a_fast * (flows[k] - self.fast[k]);
@@ -276,10 +340,14 @@ impl<T: Real> Decision<T> {
     }
 
     /// Reported leak flows (internal, external) and their 1σ, l/min:
-    /// averages over the evidence window.
+    /// averages over the evidence window, never negative (an estimate
+    /// below the healthy baseline is no leak).
     pub fn leak_flows(&self) -> ([f32; 2], [f32; 2]) {
         (
-            [self.slow[0].to_f32(), self.slow[1].to_f32()],
+            [
+                self.slow[0].max(T::ZERO).to_f32(),
+                self.slow[1].max(T::ZERO).to_f32(),
+            ],
             [self.slow_sd[0].to_f32(), self.slow_sd[1].to_f32()],
         )
     }
@@ -290,9 +358,13 @@ impl<T: Real> Decision<T> {
         [self.valve[0].to_f32(), self.valve[1].to_f32()]
     }
 
-    /// The fast (detection) averages of the leak flows, l/min.
+    /// The fast (detection) averages of the leak flows, l/min, never
+    /// negative.
     pub fn detection_flows(&self) -> [f32; 2] {
-        [self.fast[0].to_f32(), self.fast[1].to_f32()]
+        [
+            self.fast[0].max(T::ZERO).to_f32(),
+            self.fast[1].max(T::ZERO).to_f32(),
+        ]
     }
 
     /// Evidence per hypothesis.

@@ -23,7 +23,9 @@ const SPOOL_DT_TOLERANCE: f64 = 1e-6;
 /// Derived per-installation constants.
 #[derive(Clone, Debug)]
 struct Config<T> {
-    r: [T; NZ],
+    /// Scale of each reading's σ into the filter's units: position (m →
+    /// X_REF), pressures (bar → P_REF).
+    r_scale: [T; NZ],
     noise: ProcessNoise<T>,
     p0: [T; NB],
     leak_prior_sd: T,
@@ -33,6 +35,12 @@ struct Config<T> {
     gap_s: f64,
     pressure_lag_s: T,
     warm_up_s: f64,
+    /// Lowest leak coefficients (internal, external), l/min at 10 bar.
+    leak_floor: [T; 2],
+    /// Stroke in the scaled position unit.
+    stroke: T,
+    /// Valve command band of the holding region: null ± dead zone.
+    hold_band: (f32, f32),
 }
 
 /// The leak monitor for one cylinder.
@@ -71,8 +79,9 @@ impl<T: Real> Monitor<T> {
         let f = &params.filter;
         let sx = params.sensors.position_noise_m / X_REF;
         let sp = params.sensors.pressure_noise_bar * BAR / P_REF;
+        let leakage = &params.leakage;
         let cfg = Config {
-            r: [T::c(sx * sx), T::c(sp * sp), T::c(sp * sp)],
+            r_scale: [T::c(1.0 / X_REF), T::c(BAR / P_REF), T::c(BAR / P_REF)],
             noise: ProcessNoise {
                 base: [
                     T::c(f.q_position),
@@ -106,6 +115,16 @@ impl<T: Real> Monitor<T> {
             gap_s: GAP_PERIODS * f.sample_period_s,
             pressure_lag_s: T::c(params.sensors.pressure_lag_s),
             warm_up_s: f.warm_up_s,
+            // l/min per bar → l/min at 10 bar.
+            leak_floor: [
+                T::c(-10.0 * leakage.seal_lpm_per_bar),
+                T::c(-10.0 * leakage.external_lpm_per_bar.max(0.0)),
+            ],
+            stroke: T::c(params.cylinder.stroke_m / X_REF),
+            hold_band: (
+                (params.valve.null_offset - params.valve.dead_zone) as f32,
+                (params.valve.null_offset + params.valve.dead_zone) as f32,
+            ),
         };
         let period = f.sample_period_s;
         Ok(Self {
@@ -166,6 +185,7 @@ impl<T: Real> Monitor<T> {
         if dt > self.cfg.gap_s && self.bank.is_some() {
             self.bank = None;
             self.held = None;
+            self.checker.break_pressure_sequence();
             flags |= health::DATA_GAP;
             let _ = events.push(Event::DataGap);
         }
@@ -175,6 +195,7 @@ impl<T: Real> Monitor<T> {
             // from fresh readings once every channel is back.
             self.bank = None;
             self.held = None;
+            self.checker.break_pressure_sequence();
             return self.status(
                 sample.t_s,
                 checked.faulted,
@@ -183,7 +204,11 @@ impl<T: Real> Monitor<T> {
             );
         };
         self.update_temperature(c.temp_oil_c);
+        self.checker.observe_pressures(c.p_piston_bar, c.p_rod_bar);
         let suspect = checked.suspect != 0;
+        if checked.outlier {
+            flags |= health::OUTLIER;
+        }
 
         let m = self.measurement(&c);
         // The command (and the port pressures) read at the previous sample
@@ -241,6 +266,8 @@ impl<T: Real> Monitor<T> {
             } else {
                 self.quiet.gain_weight()
             },
+            leak_floor: self.cfg.leak_floor,
+            stroke: self.cfg.stroke,
         };
         let mut ok: BankOutput<T> = [None; 4];
         bank.step(&self.plant, &ctx, &self.cfg.noise, &m, &mut ok);
@@ -273,11 +300,20 @@ impl<T: Real> Monitor<T> {
         if warming {
             flags |= health::WARMING_UP;
         }
+        let (lo, hi) = self.cfg.hold_band;
+        let region = if c.u_valve < lo {
+            0
+        } else if c.u_valve > hi {
+            2
+        } else {
+            1
+        };
         flags |= self.decision.update(
             &ok,
             T::c(dt),
             self.quiet.weight(),
             !warming && !suspect && flags & health::FILTER_RESET == 0,
+            region,
             &mut events,
         );
         self.status(sample.t_s, checked.faulted, flags, events)
@@ -296,13 +332,19 @@ impl<T: Real> Monitor<T> {
     }
 
     fn measurement(&self, c: &Conditioned) -> Measurement<T> {
+        // Each reading's noise as estimated from the data (`signal::noise`).
+        let sigma = self.checker.noise_sigma();
+        let r: [T; NZ] = core::array::from_fn(|k| {
+            let s = T::from_f32(sigma[k]) * self.cfg.r_scale[k];
+            s * s
+        });
         Measurement {
             z: [
                 T::from_f32(c.x_piston_m) / T::c(X_REF),
                 T::from_f32(c.p_piston_bar) * T::c(BAR / P_REF),
                 T::from_f32(c.p_rod_bar) * T::c(BAR / P_REF),
             ],
-            r: self.cfg.r,
+            r,
         }
     }
 
@@ -316,10 +358,22 @@ impl<T: Real> Monitor<T> {
         // themselves): its fault is reported in flags and events but does
         // not take the verdict away. A required channel's fault does.
         let required_fault = faulted & !Channel::TempOil.bit() != 0;
+        // `healthy` is a claim that needs evidence (`Decision::conclusive`).
+        let unsettled = health::WARMING_UP
+            | health::TIME_NOT_INCREASING
+            | health::FILTER_RESET
+            | health::DATA_GAP;
+        if self.bank.is_none() || flags & unsettled != 0 || !d.conclusive() {
+            flags |= health::INCONCLUSIVE;
+        }
         let verdict = if required_fault {
             Verdict::SensorFault
-        } else {
+        } else if d.verdict().is_leak() {
             d.verdict()
+        } else if flags & health::INCONCLUSIVE != 0 {
+            Verdict::Inconclusive
+        } else {
+            Verdict::Healthy
         };
         let estimating = self.bank.is_some() && flags & health::WARMING_UP == 0;
         let ([li, le], [sdi, sde]) = d.leak_flows();

@@ -230,6 +230,12 @@ params_struct! {
         pub pressure_range_bar: [f64; 2] = [-2.0, 400.0],
         /// Plausible position range beyond the stroke ends, m.
         pub position_margin_m: f64 = 0.01,
+        /// Lowest white-noise σ the filters assume for a pressure reading,
+        /// bar, whatever the online estimate says (a quantised, noise-free
+        /// recording has none at holds).
+        pub pressure_noise_floor_bar: f64 = 0.01,
+        /// Lowest white-noise σ assumed for the position reading, m.
+        pub position_noise_floor_m: f64 = 2.0e-6,
     }
 }
 
@@ -293,6 +299,18 @@ params_struct! {
         pub learning_recovery_s: f64 = 0.3,
         /// Nominal sample period, s; gaps over 5 periods re-initialise.
         pub sample_period_s: f64 = 0.001,
+        /// Time constant of the online estimate of each reading's noise, s
+        /// (`signal::noise`); `sensors.*_noise_*` are its starting values.
+        pub noise_time_constant_s: f64 = 2.0,
+        /// Evidence-weighted time the filters must have seen after the
+        /// warm-up before the monitor claims `healthy`, s.
+        pub min_evidence_s: f64 = 1.0,
+        /// Time constant of the recent evidence weight, s: when its average
+        /// falls below `min_evidence_fraction` the verdict is
+        /// `inconclusive` (too little quasi-steady operation for too long).
+        pub evidence_memory_s: f64 = 30.0,
+        /// See `evidence_memory_s`.
+        pub min_evidence_fraction: f64 = 0.05,
     }
 }
 
@@ -364,7 +382,7 @@ impl Params {
     /// Check that every value is finite and physically meaningful. Returns
     /// the first offending field's name.
     pub fn validate(&self) -> Result<(), ParamError> {
-        let positive: [(&'static str, f64); 29] = [
+        let positive: [(&'static str, f64); 33] = [
             ("cylinder.piston_area_m2", self.cylinder.piston_area_m2),
             ("cylinder.rod_side_area_m2", self.cylinder.rod_side_area_m2),
             ("cylinder.stroke_m", self.cylinder.stroke_m),
@@ -429,6 +447,19 @@ impl Params {
                 self.filter.complexity_penalty_per_s,
             ),
             ("filter.sample_period_s", self.filter.sample_period_s),
+            (
+                "filter.noise_time_constant_s",
+                self.filter.noise_time_constant_s,
+            ),
+            ("filter.evidence_memory_s", self.filter.evidence_memory_s),
+            (
+                "sensors.pressure_noise_floor_bar",
+                self.sensors.pressure_noise_floor_bar,
+            ),
+            (
+                "sensors.position_noise_floor_m",
+                self.sensors.position_noise_floor_m,
+            ),
             ("alarm.alarm_lpm", self.alarm.alarm_lpm),
         ];
         for (name, v) in positive {
@@ -439,7 +470,7 @@ impl Params {
                 });
             }
         }
-        let non_negative: [(&'static str, f64); 21] = [
+        let non_negative: [(&'static str, f64); 22] = [
             ("valve.dead_zone", self.valve.dead_zone),
             (
                 "valve.edge_leak_lpm_per_bar",
@@ -467,6 +498,7 @@ impl Params {
             ("filter.q_gain", self.filter.q_gain),
             ("filter.gain_prior", self.filter.gain_prior),
             ("filter.warm_up_s", self.filter.warm_up_s),
+            ("filter.min_evidence_s", self.filter.min_evidence_s),
         ];
         for (name, v) in non_negative {
             if !(v.is_finite() && v >= 0.0) {
@@ -538,6 +570,12 @@ impl Params {
             return Err(ParamError {
                 field: "alarm.debounce_s",
                 problem: "must be ≥ 0",
+            });
+        }
+        if !(self.filter.min_evidence_fraction >= 0.0 && self.filter.min_evidence_fraction < 1.0) {
+            return Err(ParamError {
+                field: "filter.min_evidence_fraction",
+                problem: "must be in [0, 1)",
             });
         }
         if !(self.alarm.min_probability > 0.0 && self.alarm.min_probability < 1.0) {

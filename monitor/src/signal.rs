@@ -43,8 +43,12 @@ pub struct Checked {
     pub values: Option<Conditioned>,
     /// Faulted channels (`Channel::bit`).
     pub faulted: u8,
-    /// Channels whose reading may be frozen (`frozen`): not leak evidence.
+    /// Channels whose reading may be frozen (`frozen`), or was an outlier,
+    /// or whose command the motion contradicts (`plausible`): not leak
+    /// evidence.
     pub suspect: u8,
+    /// A reading was rejected as an outlier at this sample.
+    pub outlier: bool,
 }
 
 /// Checks samples and remembers which channels are faulted, to report
@@ -56,6 +60,10 @@ pub struct SampleChecker {
     pressure_range: (f32, f32),
     position_range: (f32, f32),
     frozen: frozen::FrozenDetector,
+    spikes: plausible::PositionSpikes,
+    command: plausible::CommandAgreement,
+    /// Noise of the position, piston- and rod-chamber readings.
+    noise: [noise::NoiseEstimate; 3],
     faulted: u8,
 }
 
@@ -78,8 +86,34 @@ impl SampleChecker {
                 dead_zone: params.valve.dead_zone as f32,
                 null_offset: params.valve.null_offset as f32,
             }),
+            spikes: plausible::PositionSpikes::default(),
+            command: plausible::CommandAgreement::new(
+                params.valve.dead_zone as f32,
+                params.valve.null_offset as f32,
+            ),
+            noise: {
+                let f = &params.filter;
+                let (tc, period) = (f.noise_time_constant_s as f32, f.sample_period_s as f32);
+                let px = s.position_noise_m as f32;
+                let pp = s.pressure_noise_bar as f32;
+                [
+                    noise::NoiseEstimate::new(px, s.position_noise_floor_m as f32, tc, period),
+                    noise::NoiseEstimate::new(pp, s.pressure_noise_floor_bar as f32, tc, period),
+                    noise::NoiseEstimate::new(pp, s.pressure_noise_floor_bar as f32, tc, period),
+                ]
+            },
             faulted: 0,
         }
+    }
+
+    /// The estimated white-noise σ of the position (m) and of the piston-
+    /// and rod-chamber pressures (bar).
+    pub fn noise_sigma(&self) -> [f32; 3] {
+        [
+            self.noise[0].sigma(),
+            self.noise[1].sigma(),
+            self.noise[2].sigma(),
+        ]
     }
 
     /// Condition `s`, pushing fault and recovery events. `dt_s` is the
@@ -108,6 +142,8 @@ impl SampleChecker {
             self.position_range.1,
         );
         let u_valve = read(Channel::UValve, 0.0, -U_VALVE_LIMIT, U_VALVE_LIMIT).clamp(-1.0, 1.0);
+        let (x_piston_m, plausibility) = self.plausibility(x_piston_m, u_valve, dt_s, faulted);
+        faulted |= plausibility.faulted;
         let readings = (faulted == 0).then_some(frozen::Readings {
             p_supply_bar,
             p_piston_bar,
@@ -148,8 +184,68 @@ impl SampleChecker {
         Checked {
             values,
             faulted,
-            suspect: frozen.suspect,
+            suspect: frozen.suspect | plausibility.suspect,
+            outlier: plausibility.outlier,
         }
+    }
+
+    /// Spikes on the position, the command against the motion, and the
+    /// noise levels of the readings that passed.
+    fn plausibility(&mut self, x_m: f32, u: f32, dt_s: f32, faulted: u8) -> (f32, Plausibility) {
+        let mut out = Plausibility::default();
+        let x_bit = Channel::XPiston.bit();
+        if faulted & x_bit != 0 {
+            self.spikes.break_sequence();
+            self.command.break_sequence();
+            self.noise[0].break_sequence();
+            return (x_m, out);
+        }
+        if dt_s <= 0.0 {
+            // An ignored sample (time not advancing): nothing to learn.
+            return (x_m, out);
+        }
+        let spike = self.spikes.check(x_m, dt_s, self.noise[0].sigma());
+        if spike.outlier {
+            out.outlier = true;
+            out.suspect |= x_bit;
+        } else {
+            self.noise[0].update(x_m);
+        }
+        if spike.faulted {
+            out.faulted |= x_bit;
+        }
+        if faulted & Channel::UValve.bit() == 0 {
+            let c = self.command.check(spike.x_m, u, dt_s);
+            if c.contradicted {
+                out.suspect |= Channel::UValve.bit();
+            }
+            if c.faulted {
+                out.faulted |= Channel::UValve.bit();
+            }
+        }
+        (spike.x_m, out)
+    }
+
+    /// Take the chamber readings of a sample into the noise estimates.
+    pub fn observe_pressures(&mut self, p_piston_bar: f32, p_rod_bar: f32) {
+        self.noise[1].update(p_piston_bar);
+        self.noise[2].update(p_rod_bar);
+    }
+}
+
+/// What the plausibility checks found in one sample.
+#[derive(Clone, Copy, Debug, Default)]
+struct Plausibility {
+    faulted: u8,
+    suspect: u8,
+    outlier: bool,
+}
+
+impl SampleChecker {
+    /// Forget the sequence of chamber readings (a fault or a gap).
+    pub fn break_pressure_sequence(&mut self) {
+        self.noise[1].break_sequence();
+        self.noise[2].break_sequence();
     }
 }
 
@@ -227,3 +323,7 @@ pub mod frontend;
 pub mod ne43;
 // Frozen readings, checked by `SampleChecker` on the device and the host.
 pub mod frozen;
+// Each reading's noise level, for the filters' measurement noise.
+pub mod noise;
+// Position spikes and a valve command the motion contradicts.
+pub mod plausible;

@@ -17,6 +17,11 @@ pub enum Verdict {
     Both = 3,
     /// A measurement the monitor cannot trust: no leak verdict possible.
     SensorFault = 4,
+    /// Not enough valid evidence to say `Healthy` or name a leak: warming
+    /// up, time not advancing, filters resetting, the model not fitting
+    /// the data, or too little quasi-steady operation for too long.
+    /// `Healthy` is a claim backed by evidence; this is its absence.
+    Inconclusive = 5,
 }
 
 impl Verdict {
@@ -28,6 +33,7 @@ impl Verdict {
             Self::External => "external",
             Self::Both => "both",
             Self::SensorFault => "sensor_fault",
+            Self::Inconclusive => "inconclusive",
         }
     }
 
@@ -81,6 +87,13 @@ pub mod health {
     pub const MODEL_MISMATCH: u16 = 1 << 7;
     /// The sample time did not increase: sample ignored.
     pub const TIME_NOT_INCREASING: u16 = 1 << 8;
+    /// The monitor has not evaluated enough valid evidence to claim
+    /// healthy (the verdict is `Inconclusive` unless a leak is latched or
+    /// a sensor is faulted).
+    pub const INCONCLUSIVE: u16 = 1 << 9;
+    /// A reading was rejected as an outlier at this sample (a spike, or a
+    /// valve command the motion contradicts): it was not used.
+    pub const OUTLIER: u16 = 1 << 10;
 }
 
 /// Something that happened at this sample.

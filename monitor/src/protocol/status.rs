@@ -5,7 +5,7 @@
 //! |---|---|---|---|
 //! | 0 | 0–7 | CRC | E2E P01 |
 //! | 1 | 0–3 | Counter | 0..=14 |
-//! | 1 | 4–7 | Verdict | 0 healthy, 1 internal, 2 external, 3 both, 4 sensor fault |
+//! | 1 | 4–7 | Verdict | 0 healthy, 1 internal, 2 external, 3 both, 4 sensor fault, 5 inconclusive |
 //! | 2–3 | | LeakInternal | i16, 0.001 l/min, −32768 = not available |
 //! | 4–5 | | LeakExternal | i16, 0.001 l/min, −32768 = not available |
 //! | 6–7 | | Health | `status::health` bit mask |
@@ -42,6 +42,7 @@ pub(crate) fn verdict_from_code(code: u8) -> Option<Verdict> {
         Verdict::External,
         Verdict::Both,
         Verdict::SensorFault,
+        Verdict::Inconclusive,
     ]
     .get(code as usize)
     .copied()

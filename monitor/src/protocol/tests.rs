@@ -257,21 +257,21 @@ fn foreign_and_malformed_frames_are_rejected() {
         Decoder::new().decode(&CanFrame::new(id, &data).unwrap())
     };
     assert!(matches!(
-        field(0x301, [0, 0x50, 0, 0, 0, 0, 0, 0]),
+        field(0x301, [0, 0x60, 0, 0, 0, 0, 0, 0]),
         Err(DecodeError::Field {
             error: FieldError {
                 field: "Verdict",
-                raw: 5
+                raw: 6
             },
             ..
         })
     ));
     assert!(matches!(
-        field(0x300, [0, 0x50, 0, 0, 0, 0, 0, 0]),
+        field(0x300, [0, 0x60, 0, 0, 0, 0, 0, 0]),
         Err(DecodeError::Field {
             error: FieldError {
                 field: "AlarmState",
-                raw: 5
+                raw: 6
             },
             ..
         })

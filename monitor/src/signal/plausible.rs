@@ -1,0 +1,301 @@
+//! Physical plausibility of the position reading and of the valve command.
+//!
+//! **Spikes.** A piston of a few hundred kilograms cannot move 5 mm in a
+//! millisecond. A position reading that jumps further from the last
+//! accepted one than [`MAX_SPEED_M_S`] allows (plus the reading's noise)
+//! is an outlier: it is not used (the last accepted reading stands in and
+//! the sample is no leak evidence) and it is counted. A count that decays
+//! with [`OUTLIER_MEMORY_S`] and reaches [`OUTLIER_FAULT_COUNT`] makes the
+//! channel faulted: a transmitter that spikes again and again cannot be
+//! trusted. A jump that persists for [`REBASE_SAMPLES`] is taken as the new
+//! level (and counted).
+//!
+//! **Valve command.** An open wire on the command input reads 0 while the
+//! machine's controller still drives the real valve: the piston moves with
+//! a command that says "closed", which the filters would read as oil
+//! leaving through a leak. When the piston moves faster than
+//! [`CLOSED_SPEED_M_S`] with the command inside the valve's dead zone, or
+//! clearly against the commanded direction, the command is contradicted:
+//! from the first such sample the sample is no evidence, and after
+//! [`COMMAND_FAULT_S`] of contradiction the command channel is faulted.
+//! The contradiction drains ten times slower than it fills, so an open
+//! wire stays a fault through the holds between moves.
+
+/// Fastest plausible piston speed, m/s (the rig moves at ≤ 0.2 m/s).
+pub const MAX_SPEED_M_S: f32 = 0.5;
+/// A jump must also exceed this many σ of the reading's noise.
+const JUMP_SIGMAS: f32 = 8.0;
+/// And this much, m (quantisation of coarse recordings).
+const JUMP_MIN_M: f32 = 1.0e-4;
+/// Time constant of the outlier count's decay, s.
+pub const OUTLIER_MEMORY_S: f32 = 10.0;
+/// Outlier count that faults the channel.
+pub const OUTLIER_FAULT_COUNT: f32 = 3.0;
+/// Outlier count below which a faulted channel recovers.
+const OUTLIER_RECOVER_COUNT: f32 = 1.0;
+/// Consecutive outlying samples after which the new level is accepted.
+const REBASE_SAMPLES: u8 = 20;
+/// Smoothing of the position and of its rate for the command check, s.
+const SPEED_SMOOTHING_S: f32 = 0.02;
+/// Speed that a closed valve cannot explain, m/s (a 1 l/min leak moves
+/// this piston at 5 mm/s).
+pub const CLOSED_SPEED_M_S: f32 = 0.02;
+/// Command beyond the dead zone that names a direction.
+const DIRECTION_MARGIN: f32 = 0.05;
+/// Contradiction time that faults the command, s.
+pub const COMMAND_FAULT_S: f32 = 0.3;
+/// The contradiction drains this many times slower than it fills.
+const COMMAND_DRAIN: f32 = 10.0;
+/// Contradiction time kept at most, s.
+const COMMAND_MEMORY_S: f32 = 2.0;
+
+/// Verdict on one position reading.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PositionCheck {
+    /// The reading to use, m (the last accepted one for an outlier).
+    pub x_m: f32,
+    /// This reading was an outlier.
+    pub outlier: bool,
+    /// Outliers are persistent: the channel is faulted.
+    pub faulted: bool,
+}
+
+/// Rate plausibility of the position reading.
+#[derive(Clone, Debug, Default)]
+pub struct PositionSpikes {
+    last_good: Option<f32>,
+    pending: u8,
+    count: f32,
+    faulted: bool,
+}
+
+impl PositionSpikes {
+    /// Check reading `x_m`, `dt_s` after the previous sample, with the
+    /// reading's current noise σ `sigma_m`.
+    pub fn check(&mut self, x_m: f32, dt_s: f32, sigma_m: f32) -> PositionCheck {
+        self.count -= self.count * (dt_s / OUTLIER_MEMORY_S).min(1.0);
+        let mut outlier = false;
+        let x = match self.last_good {
+            None => {
+                self.last_good = Some(x_m);
+                x_m
+            }
+            Some(good) => {
+                let elapsed = dt_s * (self.pending as f32 + 1.0);
+                let limit = MAX_SPEED_M_S * elapsed + JUMP_SIGMAS * sigma_m + JUMP_MIN_M;
+                if (x_m - good).abs() <= limit {
+                    self.pending = 0;
+                    self.last_good = Some(x_m);
+                    x_m
+                } else {
+                    if self.pending == 0 {
+                        self.count += 1.0;
+                    }
+                    self.pending += 1;
+                    if self.pending >= REBASE_SAMPLES {
+                        // The level really changed (a re-zeroed transducer,
+                        // a loose connector settling): take it, counted.
+                        self.pending = 0;
+                        self.last_good = Some(x_m);
+                        x_m
+                    } else {
+                        outlier = true;
+                        good
+                    }
+                }
+            }
+        };
+        if self.count >= OUTLIER_FAULT_COUNT {
+            self.faulted = true;
+        } else if self.count < OUTLIER_RECOVER_COUNT {
+            self.faulted = false;
+        }
+        PositionCheck {
+            x_m: x,
+            outlier,
+            faulted: self.faulted,
+        }
+    }
+
+    /// Forget the last reading (the channel was missing); the count stays.
+    pub fn break_sequence(&mut self) {
+        self.last_good = None;
+        self.pending = 0;
+    }
+
+    /// The decaying outlier count.
+    pub fn count(&self) -> f32 {
+        self.count
+    }
+}
+
+/// Verdict on one valve command.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct CommandCheck {
+    /// The motion contradicts the command now (the sample is no evidence).
+    pub contradicted: bool,
+    /// It has for long enough: the command channel is faulted.
+    pub faulted: bool,
+}
+
+/// Does the piston's motion agree with the valve command?
+#[derive(Clone, Debug)]
+pub struct CommandAgreement {
+    dead_zone: f32,
+    null_offset: f32,
+    x_smooth: Option<f32>,
+    speed: f32,
+    contradiction_s: f32,
+    faulted: bool,
+}
+
+impl CommandAgreement {
+    /// For a valve with `dead_zone` and `null_offset` (fractions of travel).
+    pub fn new(dead_zone: f32, null_offset: f32) -> Self {
+        Self {
+            dead_zone,
+            null_offset,
+            x_smooth: None,
+            speed: 0.0,
+            contradiction_s: 0.0,
+            faulted: false,
+        }
+    }
+
+    /// Take the accepted position `x_m` and the command `u` of a sample
+    /// `dt_s` after the previous one.
+    pub fn check(&mut self, x_m: f32, u: f32, dt_s: f32) -> CommandCheck {
+        let a = (dt_s / SPEED_SMOOTHING_S).min(1.0);
+        match self.x_smooth {
+            None => self.x_smooth = Some(x_m),
+            Some(xs) if dt_s > 0.0 => {
+                let next = xs + a * (x_m - xs);
+                let rate = (next - xs) / dt_s;
+                self.speed += a * (rate - self.speed);
+                self.x_smooth = Some(next);
+            }
+            Some(_) => {}
+        }
+        let opening = u - self.null_offset;
+        let v = self.speed;
+        let closed = opening.abs() <= self.dead_zone && v.abs() > CLOSED_SPEED_M_S;
+        let margin = self.dead_zone + DIRECTION_MARGIN;
+        let against = (opening > margin && v < -CLOSED_SPEED_M_S)
+            || (opening < -margin && v > CLOSED_SPEED_M_S);
+        let contradicted = closed || against;
+        if contradicted {
+            self.contradiction_s = (self.contradiction_s + dt_s).min(COMMAND_MEMORY_S);
+        } else {
+            self.contradiction_s = (self.contradiction_s - dt_s / COMMAND_DRAIN).max(0.0);
+        }
+        if self.contradiction_s >= COMMAND_FAULT_S {
+            self.faulted = true;
+        } else if self.contradiction_s <= 0.0 {
+            self.faulted = false;
+        }
+        CommandCheck {
+            contradicted: contradicted || self.contradiction_s > 0.0,
+            faulted: self.faulted,
+        }
+    }
+
+    /// Forget the motion (a channel was missing).
+    pub fn break_sequence(&mut self) {
+        self.x_smooth = None;
+        self.speed = 0.0;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::testutil::Lcg;
+
+    #[test]
+    fn a_single_spike_is_rejected_but_not_a_fault() {
+        let mut s = PositionSpikes::default();
+        let mut rng = Lcg::new(3);
+        let mut flagged = 0;
+        for k in 0..5_000 {
+            let truth = 0.05 + 0.05 * (k as f32 * 1e-3); // 50 mm/s
+            let spike = if k == 2_000 { 0.02 } else { 0.0 };
+            let x = truth + 5e-5 * rng.gaussian() as f32 + spike;
+            let c = s.check(x, 1e-3, 5e-5);
+            if c.outlier {
+                flagged += 1;
+                assert_eq!(k, 2_000);
+                assert!((c.x_m - truth).abs() < 1e-3);
+            }
+            assert!(!c.faulted);
+        }
+        assert_eq!(flagged, 1);
+    }
+
+    #[test]
+    fn repeated_spikes_fault_the_channel_and_it_recovers() {
+        let mut s = PositionSpikes::default();
+        let mut faulted_at = None;
+        for k in 0..4_000 {
+            // 1.5 spikes per second of 2 samples, 10 mm.
+            let spike = if k % 667 < 2 && k > 0 { 0.01 } else { 0.0 };
+            if s.check(0.08 + spike, 1e-3, 5e-5).faulted && faulted_at.is_none() {
+                faulted_at = Some(k);
+            }
+        }
+        assert!(faulted_at.is_some_and(|k| k < 2_100), "{faulted_at:?}");
+        let mut k = 0;
+        while s.check(0.08, 1e-3, 5e-5).faulted {
+            k += 1;
+            assert!(k < 20_000, "never recovers");
+        }
+    }
+
+    #[test]
+    fn fast_real_motion_is_not_a_spike() {
+        let mut s = PositionSpikes::default();
+        for k in 0..2_000 {
+            let x = 0.01 + 0.3 * (k as f32 * 1e-3).min(0.5); // 300 mm/s
+            assert!(!s.check(x, 1e-3, 5e-5).outlier, "{k}");
+        }
+    }
+
+    #[test]
+    fn an_open_command_wire_is_a_fault_within_half_a_second_of_motion() {
+        let mut c = CommandAgreement::new(0.015, 0.0);
+        // Hold, then a 50 mm/s move with the command reading 0.
+        let mut fault_at = None;
+        for k in 0..3_000 {
+            let t = k as f32 * 1e-3;
+            let x = 0.05 + 0.05 * (t - 1.0).max(0.0);
+            let r = c.check(x, 0.0, 1e-3);
+            if k < 1_000 {
+                assert!(!r.contradicted, "{k}");
+            }
+            if r.faulted && fault_at.is_none() {
+                fault_at = Some(k);
+            }
+        }
+        assert!(fault_at.is_some_and(|k| k < 1_500), "{fault_at:?}");
+    }
+
+    #[test]
+    fn a_command_that_drives_the_motion_is_not_contradicted() {
+        let mut c = CommandAgreement::new(0.015, 0.0);
+        let mut rng = Lcg::new(5);
+        let mut x = 0.05_f32;
+        for k in 0..10_000 {
+            let t = k as f32 * 1e-3;
+            // Moves of ±60 mm/s with the command, holds between.
+            let phase = (t / 2.0) as u32 % 4;
+            let (u, v) = match phase {
+                0 => (0.0, 0.0),
+                1 => (0.3, 0.06),
+                2 => (0.0, 0.0),
+                _ => (-0.3, -0.06),
+            };
+            x += v * 1e-3;
+            let r = c.check(x + 1e-4 * rng.gaussian() as f32, u, 1e-3);
+            assert!(!r.faulted, "{k}");
+        }
+    }
+}
