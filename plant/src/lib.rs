@@ -1,0 +1,214 @@
+//! An independent, hostile test plant for the leak monitor.
+//!
+//! It shares **no model code** with `monitor` (this crate must never depend
+//! on it): its own derivation of the pantograph load, its own fluid, valve,
+//! friction, supply and sensor models. Each rig is drawn from a seed and
+//! varies what real rigs vary: noise levels and colour, offsets, lags,
+//! quantisation, valve land leakage per edge, friction law, supply
+//! dynamics, tank back pressure, hose compliance, air, load errors,
+//! temperature drift, end stops; and faults.
+//!
+//! Interface (stable: `host-sim` builds on it):
+//! - [`RigSpec::random`]: a rig from a seed, at a supply pressure and
+//!   oil temperature.
+//! - [`Run`]: a rig, a [`Scenario`], a [`Leak`] and optional [`Fault`]s.
+//! - [`simulate`]: the recording rows at the sample rate, with truth.
+
+use serde::{Deserialize, Serialize};
+
+/// Everything physical and metrological about one rig. Drawn from a seed
+/// by [`RigSpec::random`]; fields are public so a test can pin one effect.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RigSpec {
+    /// The seed it was drawn from.
+    pub seed: u64,
+    /// Relief / compensator set pressure, bar.
+    pub supply_bar: f64,
+    /// Oil temperature at the start, °C.
+    pub temp_c: f64,
+    // The plant helper adds every randomised property here (geometry and
+    // load errors, valve, land leakage per edge, friction law, supply,
+    // tank line, hoses, air, sensors per channel, ...).
+}
+
+impl RigSpec {
+    /// A rig drawn from `seed` (deterministic), running at `supply_bar`
+    /// with oil at `temp_c`.
+    pub fn random(seed: u64, supply_bar: f64, temp_c: f64) -> Self {
+        let _ = (seed, supply_bar, temp_c);
+        todo!("plant helper")
+    }
+}
+
+/// What the machine does with the cylinder.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub enum Scenario {
+    /// Position control through a work cycle of holds, slow and fast moves
+    /// in both directions (thesis ch. 9 style), drawn from `seed`.
+    ClosedLoop {
+        /// Length, s.
+        duration_s: f64,
+        /// Seed of the motion profile.
+        seed: u64,
+    },
+    /// Position control: a few moves, then one hold of `hold_s` at a
+    /// mid-stroke position, then a few moves again.
+    LongHold {
+        /// Length of the hold, s (≥ 600 for the 10-minute case).
+        hold_s: f64,
+        /// Seed of the moves around the hold.
+        seed: u64,
+    },
+    /// Open-loop valve step test: closed-loop hold, then at `step_at_s` the
+    /// valve command steps to `amplitude` (signed, fraction of full
+    /// opening) for the rest of the run (the piston may reach an end stop).
+    StepTest {
+        /// Length, s (10 for the thesis-style test).
+        duration_s: f64,
+        /// Time of the step, s.
+        step_at_s: f64,
+        /// Command after the step, −1..1.
+        amplitude: f64,
+    },
+}
+
+/// Leaks of the run, given as the **mean flow** they would have over the
+/// run after onset at this rig's operating pressures, l/min (0: none).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Leak {
+    /// Piston seal leak, piston chamber → rod chamber, l/min.
+    pub internal_lpm: f64,
+    /// Leak from the rod-side line to tank, l/min.
+    pub external_lpm: f64,
+    /// Time the leaks start, s (0: present from the start).
+    pub onset_s: f64,
+}
+
+/// A measured channel of the recording.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Channel {
+    /// Supply pressure.
+    PSupply,
+    /// Piston chamber pressure.
+    PPiston,
+    /// Rod chamber pressure.
+    PRod,
+    /// Tank pressure.
+    PTank,
+    /// Piston position.
+    XPiston,
+    /// Valve command.
+    UValve,
+}
+
+/// A fault of the measurement chain, from `at_s` on.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub enum Fault {
+    /// Spikes of 1–3 samples on `channel` (position: 5–30 mm; pressures:
+    /// 5–50 bar), about `rate_hz` per second.
+    Spikes {
+        /// Which channel.
+        channel: Channel,
+        /// Mean spike rate, 1/s.
+        rate_hz: f64,
+        /// From this time, s.
+        at_s: f64,
+    },
+    /// Open wire: a 4–20 mA pressure or position loop reads empty
+    /// (invalid); the valve command (a voltage input) reads 0.
+    OpenWire {
+        /// Which channel.
+        channel: Channel,
+        /// From this time, s.
+        at_s: f64,
+    },
+    /// The channel repeats its last reading bit for bit.
+    Frozen {
+        /// Which channel.
+        channel: Channel,
+        /// From this time, s.
+        at_s: f64,
+    },
+    /// The time stamp stops advancing (repeats) for `for_s` of real time.
+    StuckTime {
+        /// From this time, s.
+        at_s: f64,
+        /// For this long, s.
+        for_s: f64,
+    },
+    /// The time stamp is NaN (written as `NaN`) for `for_s`.
+    NanTime {
+        /// From this time, s.
+        at_s: f64,
+        /// For this long, s.
+        for_s: f64,
+    },
+    /// Every channel is replaced by random noise in its plausible range
+    /// (not a machine at all).
+    RandomNoise,
+}
+
+/// One simulated run.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Run {
+    /// The rig.
+    pub rig: RigSpec,
+    /// What the machine does.
+    pub scenario: Scenario,
+    /// Leaks.
+    pub leak: Leak,
+    /// Faults (usually none).
+    pub faults: Vec<Fault>,
+    /// Write the oil temperature reading.
+    pub temp_column: bool,
+    /// Sample rate of the recording, Hz (1000).
+    pub sample_rate_hz: f64,
+    /// Seed of the noise of this run.
+    pub noise_seed: u64,
+}
+
+/// What really happened at a sample (not in the recording).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Truth {
+    /// True internal leak flow, l/min (≥ 0).
+    pub internal_lpm: f64,
+    /// True external leak flow, l/min (≥ 0).
+    pub external_lpm: f64,
+    /// True piston position, m.
+    pub x_m: f64,
+    /// True piston velocity, m/s.
+    pub v_m_s: f64,
+    /// True chamber pressures (piston, rod), bar.
+    pub p_chambers_bar: [f64; 2],
+    /// At an end stop.
+    pub at_end_stop: bool,
+}
+
+/// One row of the recording (`None`: an empty, invalid field), plus truth.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Row {
+    /// Time stamp as recorded, s (may repeat or be NaN under a fault).
+    pub t: f64,
+    /// Supply pressure, bar.
+    pub p_supply: Option<f64>,
+    /// Piston chamber pressure, bar.
+    pub p_piston: Option<f64>,
+    /// Rod chamber pressure, bar.
+    pub p_rod: Option<f64>,
+    /// Tank pressure, bar.
+    pub p_tank: Option<f64>,
+    /// Piston position, m (0 = retracted).
+    pub x_piston: Option<f64>,
+    /// Valve command, −1..1.
+    pub u_valve: Option<f64>,
+    /// Oil temperature, °C (only with `Run::temp_column`).
+    pub temp_oil: Option<f64>,
+    /// Truth.
+    pub truth: Truth,
+}
+
+/// Simulate `run`: one row per sample.
+pub fn simulate(run: &Run) -> Vec<Row> {
+    let _ = run;
+    todo!("plant helper")
+}
