@@ -14,7 +14,40 @@
 //! - [`Run`]: a rig, a [`Scenario`], a [`Leak`] and optional [`Fault`]s.
 //! - [`simulate`]: the recording rows at the sample rate, with truth.
 
+#![deny(missing_docs)]
+
 use serde::{Deserialize, Serialize};
+
+pub mod controller;
+pub mod cylinder;
+pub mod faults;
+pub mod fluid;
+pub mod friction;
+pub mod leak;
+pub mod load;
+mod physics;
+mod rig;
+mod rng;
+pub mod scenario;
+pub mod sensors;
+mod sim;
+pub mod supply;
+pub mod valve;
+
+pub use controller::ControllerSpec;
+pub use cylinder::CylinderSpec;
+pub use fluid::FluidSpec;
+pub use friction::{FrictionLaw, FrictionSpec};
+pub use leak::LeakLaw;
+pub use load::LoadSpec;
+pub use sensors::{ChannelSpec, SensorSpec};
+pub use sim::{leak_law, simulate_with_report, RunReport};
+pub use supply::SupplySpec;
+pub use valve::ValveSpec;
+
+/// Temperature the viscosity-dependent coefficients (valve land leakage,
+/// viscous friction, laminar leaks) refer to, °C.
+pub const REFERENCE_TEMP_C: f64 = 25.0;
 
 /// Everything physical and metrological about one rig. Drawn from a seed
 /// by [`RigSpec::random`]; fields are public so a test can pin one effect.
@@ -26,17 +59,29 @@ pub struct RigSpec {
     pub supply_bar: f64,
     /// Oil temperature at the start, °C.
     pub temp_c: f64,
-    // The plant helper adds every randomised property here (geometry and
-    // load errors, valve, land leakage per edge, friction law, supply,
-    // tank line, hoses, air, sensors per channel, ...).
+    /// Pantograph geometry, masses, payload, force offset.
+    pub load: LoadSpec,
+    /// Cylinder areas, dead volumes, hoses, end stops.
+    pub cylinder: CylinderSpec,
+    /// Oil viscosity law, bulk modulus, air.
+    pub fluid: FluidSpec,
+    /// Servo valve: spool dynamics, edges, land leakage.
+    pub valve: ValveSpec,
+    /// Cylinder friction law and levels.
+    pub friction: FrictionSpec,
+    /// Pump, supply line, ripple, tank line.
+    pub supply: SupplySpec,
+    /// Measurement chain of every channel.
+    pub sensors: SensorSpec,
+    /// The machine's position controller.
+    pub controller: ControllerSpec,
 }
 
 impl RigSpec {
     /// A rig drawn from `seed` (deterministic), running at `supply_bar`
     /// with oil at `temp_c`.
     pub fn random(seed: u64, supply_bar: f64, temp_c: f64) -> Self {
-        let _ = (seed, supply_bar, temp_c);
-        todo!("plant helper")
+        rig::random(seed, supply_bar, temp_c)
     }
 }
 
@@ -74,6 +119,14 @@ pub enum Scenario {
 
 /// Leaks of the run, given as the **mean flow** they would have over the
 /// run after onset at this rig's operating pressures, l/min (0: none).
+///
+/// The flow law (laminar, orifice or a mix; see [`LeakLaw`]) is drawn from
+/// the run's noise seed; its coefficient is found by repeated simulation
+/// (deterministic) so that the realised mean of the signed flow after
+/// onset matches the request within ~2 %. Where the pressure difference
+/// across a leak changes sign so often that its signed mean is below 30 %
+/// of its mean magnitude, the mean magnitude is matched instead (see
+/// [`RunReport`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Leak {
     /// Piston seal leak, piston chamber → rod chamber, l/min.
@@ -170,9 +223,12 @@ pub struct Run {
 /// What really happened at a sample (not in the recording).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Truth {
-    /// True internal leak flow, l/min (≥ 0).
+    /// True internal leak flow, l/min, signed in the nominal direction
+    /// (piston chamber → rod chamber): a seal leaks either way, so it is
+    /// negative while the rod chamber pressure is the higher one.
     pub internal_lpm: f64,
-    /// True external leak flow, l/min (≥ 0).
+    /// True external leak flow, l/min, signed (rod-side line → tank;
+    /// negative only if the rod side falls below tank pressure).
     pub external_lpm: f64,
     /// True piston position, m.
     pub x_m: f64,
@@ -180,8 +236,19 @@ pub struct Truth {
     pub v_m_s: f64,
     /// True chamber pressures (piston, rod), bar.
     pub p_chambers_bar: [f64; 2],
-    /// At an end stop.
+    /// At an end stop (within 0.1 mm of 0 or of the stroke, or in contact).
     pub at_end_stop: bool,
+    /// True supply pressure at the valve (including pump ripple), bar.
+    pub p_supply_bar: f64,
+    /// True tank line pressure, bar.
+    pub p_tank_bar: f64,
+    /// True spool position, fraction of travel.
+    pub spool: f64,
+    /// True oil temperature, °C.
+    pub temp_c: f64,
+    /// The machine controller's position setpoint, m (the last one during
+    /// an open-loop step).
+    pub x_ref_m: f64,
 }
 
 /// One row of the recording (`None`: an empty, invalid field), plus truth.
@@ -209,6 +276,5 @@ pub struct Row {
 
 /// Simulate `run`: one row per sample.
 pub fn simulate(run: &Run) -> Vec<Row> {
-    let _ = run;
-    todo!("plant helper")
+    simulate_with_report(run).0
 }
