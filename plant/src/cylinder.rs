@@ -1,10 +1,16 @@
 //! The cylinder: areas, stroke, the oil volumes between valve and piston
 //! (part of them in hoses whose walls stretch with pressure), and the end
-//! stops (stiff spring–damper contacts at 0 and at the stroke).
+//! stops: a stiff spring–damper contact (a thin bumper, [`BUMPER_M`])
+//! just inside each end, backed by the rigid cylinder head at exactly 0
+//! and the stroke (a plastic impact: the integrator clamps the position
+//! and stops the piston should a fast impact squeeze the bumper through).
 
 use serde::{Deserialize, Serialize};
 
 use crate::rng::Rand;
+
+/// Thickness of the end-stop bumper inside each end of the stroke, m.
+pub const BUMPER_M: f64 = 1e-4;
 
 /// One rig's cylinder and lines.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -51,13 +57,26 @@ impl CylinderSpec {
     /// position `x` (m), velocity `v` (m/s).
     #[inline]
     pub fn stop_force(&self, x: f64, v: f64) -> f64 {
-        if x < 0.0 {
-            (-self.stop_stiffness_n_per_m * x - self.stop_damping_ns_per_m * v).max(0.0)
-        } else if x > self.stroke_m {
-            (-self.stop_stiffness_n_per_m * (x - self.stroke_m) - self.stop_damping_ns_per_m * v)
-                .min(0.0)
+        let hi = self.stroke_m - BUMPER_M;
+        if x < BUMPER_M {
+            (self.stop_stiffness_n_per_m * (BUMPER_M - x) - self.stop_damping_ns_per_m * v).max(0.0)
+        } else if x > hi {
+            (-self.stop_stiffness_n_per_m * (x - hi) - self.stop_damping_ns_per_m * v).min(0.0)
         } else {
             0.0
+        }
+    }
+
+    /// The rigid heads: clamp position `x` (m) into the stroke and stop a
+    /// velocity `v` (m/s) that points out of it.
+    #[inline]
+    pub fn clamp_to_heads(&self, x: &mut f64, v: &mut f64) {
+        if *x < 0.0 {
+            *x = 0.0;
+            *v = v.max(0.0);
+        } else if *x > self.stroke_m {
+            *x = self.stroke_m;
+            *v = v.min(0.0);
         }
     }
 }

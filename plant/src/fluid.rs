@@ -62,7 +62,8 @@ impl FluidSpec {
     pub fn bulk_modulus_bar(&self, p_bar: f64) -> f64 {
         let pa = (p_bar + P_ATM_BAR).max(0.02);
         let n = self.polytropic_exponent;
-        let vg = self.air_fraction * ((P_ATM_BAR / pa).ln() / n).exp();
+        // exp/ln: several times cheaper than powf.
+        let vg = self.air_fraction * ((P_ATM_BAR.ln() - pa.ln()) / n).exp();
         let vl = 1.0 - self.air_fraction;
         (vl + vg) / (vl / self.bulk_modulus_bar + vg / (n * pa))
     }

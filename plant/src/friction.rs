@@ -105,7 +105,9 @@ impl FrictionSpec {
                     (f, 0.0)
                 } else {
                     let g = self.coulomb_n
-                        + dfs * (-(v.abs() / self.stribeck_m_s).powf(stribeck_exponent)).exp();
+                        + dfs
+                            * (-((v.abs() / self.stribeck_m_s).ln() * stribeck_exponent).exp())
+                                .exp();
                     (g * v.signum() + b * v, 0.0)
                 }
             }

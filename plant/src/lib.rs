@@ -236,7 +236,8 @@ pub struct Truth {
     pub v_m_s: f64,
     /// True chamber pressures (piston, rod), bar.
     pub p_chambers_bar: [f64; 2],
-    /// At an end stop (within 0.1 mm of 0 or of the stroke, or in contact).
+    /// At an end stop (within 0.2 mm of 0 or of the stroke: the bumper of
+    /// [`cylinder::BUMPER_M`] and its compression).
     pub at_end_stop: bool,
     /// True supply pressure at the valve (including pump ripple), bar.
     pub p_supply_bar: f64,

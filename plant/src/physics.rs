@@ -19,13 +19,17 @@ use crate::RigSpec;
 
 /// Largest integration step, s.
 pub const MAX_STEP_S: f64 = 50e-6;
+/// Largest integration step while the valve is closed and the piston slow
+/// and clear of the stops, s.
+pub const QUIET_STEP_S: f64 = 100e-6;
 /// Fraction of the supply line volume that is hose.
 const SUPPLY_HOSE_FRACTION: f64 = 0.5;
 /// Time the machine runs (holding the first setpoint) before the recording
 /// starts, s.
 pub const PRE_ROLL_S: f64 = 3.0;
-/// Distance from a stop within which a piston counts as at the stop, m.
-pub const AT_STOP_M: f64 = 1e-4;
+/// Distance from a stroke end within which a piston counts as at the
+/// stop, m (the bumper plus its compression).
+pub const AT_STOP_M: f64 = 2e-4;
 
 const N: usize = 9;
 type State = [f64; N];
@@ -93,12 +97,12 @@ impl Model<'_> {
     }
 
     #[inline]
-    fn deriv(&self, t: f64, y: &State, h: &Held) -> State {
+    fn deriv(&self, ripple: f64, y: &State, h: &Held) -> State {
         let r = self.rig;
         let c = &r.cylinder;
         let [x, v, s, sv, pa, pb, ps, pt, z] = *y;
         // Valve and leaks.
-        let ps_valve = ps + r.supply.ripple(t);
+        let ps_valve = ps + ripple;
         let q = r.valve.edge_flows(s, ps_valve, pa, pb, pt, h.fluidity);
         let (qi, qe) = self.leaks(h, pa, pb, pt);
         // Chambers.
@@ -145,8 +149,11 @@ pub(crate) fn run(rig: &RigSpec, mut profile: Profile, p: &RunPhysics) -> Vec<Sa
         hose_s: rig.supply.line_volume_m3 * SUPPLY_HOSE_FRACTION / c.hose_stiffness_bar,
     };
     let dt = 1.0 / p.sample_rate_hz;
-    let n_sub = (dt / MAX_STEP_S).ceil().max(1.0) as usize;
-    let h = dt / n_sub as f64;
+    let n_fine = (dt / MAX_STEP_S).ceil().max(1.0) as usize;
+    // Quiet samples (valve edges covered, piston slow, clear of the stops)
+    // have no stiff orifice or contact dynamics: twice the step.
+    let n_quiet = (dt / QUIET_STEP_S).ceil().max(1.0) as usize;
+    let covered = rig.valve.overlap.iter().cloned().fold(f64::MAX, f64::min) - 0.002;
     let n_rows = (profile.duration_s * p.sample_rate_hz).round() as usize;
     let n_pre = (PRE_ROLL_S * p.sample_rate_hz).round() as usize;
 
@@ -169,6 +176,8 @@ pub(crate) fn run(rig: &RigSpec, mut profile: Profile, p: &RunPhysics) -> Vec<Sa
 
     let nu_ref = rig.fluid.viscosity_cst(crate::REFERENCE_TEMP_C);
     let mut ctrl = Controller::default();
+    let mut ripple = Vec::with_capacity(2 * n_fine + 1);
+    let ripple_now = |rig: &RigSpec, t: f64| rig.supply.ripple(t);
     let mut out = Vec::with_capacity(n_rows);
     for k in 0..(n_pre + n_rows) {
         let t = (k as f64 - n_pre as f64) * dt;
@@ -190,7 +199,7 @@ pub(crate) fn run(rig: &RigSpec, mut profile: Profile, p: &RunPhysics) -> Vec<Sa
         };
         if k >= n_pre {
             let (qi, qe) = model.leaks(&held, y[4], y[5], y[7]);
-            let ripple = rig.supply.ripple(t);
+            let ripple = ripple_now(rig, t);
             out.push(Sample {
                 x: y[0],
                 v: y[1],
@@ -207,15 +216,27 @@ pub(crate) fn run(rig: &RigSpec, mut profile: Profile, p: &RunPhysics) -> Vec<Sa
                 x_ref,
             });
         }
+        let quiet = y[1].abs() < 0.01
+            && y[2].abs() < covered
+            && (u.clamp(-1.0, 1.0) + rig.valve.null_bias).abs() < covered
+            && y[0] > 0.001
+            && y[0] < c.stroke_m - 0.001;
+        let n_sub = if quiet { n_quiet } else { n_fine };
+        let h = dt / n_sub as f64;
+        rig.supply
+            .ripple_series(t, 0.5 * h, &mut ripple, 2 * n_sub + 1);
         for j in 0..n_sub {
-            let ts = t + j as f64 * h;
-            let k1 = model.deriv(ts, &y, &held);
-            let k2 = model.deriv(ts + 0.5 * h, &axpy(&y, &k1, 0.5 * h), &held);
-            let k3 = model.deriv(ts + 0.5 * h, &axpy(&y, &k2, 0.5 * h), &held);
-            let k4 = model.deriv(ts + h, &axpy(&y, &k3, h), &held);
+            let (r0, r1, r2) = (ripple[2 * j], ripple[2 * j + 1], ripple[2 * j + 2]);
+            let k1 = model.deriv(r0, &y, &held);
+            let k2 = model.deriv(r1, &axpy(&y, &k1, 0.5 * h), &held);
+            let k3 = model.deriv(r1, &axpy(&y, &k2, 0.5 * h), &held);
+            let k4 = model.deriv(r2, &axpy(&y, &k3, h), &held);
             for i in 0..N {
                 y[i] += h / 6.0 * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i]);
             }
+            // Rigid cylinder heads.
+            let [x, v, ..] = &mut y;
+            c.clamp_to_heads(x, v);
             // Spool travel limits.
             if y[2].abs() > 1.0 {
                 y[2] = y[2].clamp(-1.0, 1.0);

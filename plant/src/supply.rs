@@ -80,6 +80,27 @@ impl SupplySpec {
         p
     }
 
+    /// Ripple at the instants `t0 + j·dt_half`, j = 0..=2n (bar), into
+    /// `out`: exact phasors at `t0`, rotated by half-steps (cheap, and
+    /// re-synchronised every sample).
+    pub(crate) fn ripple_series(&self, t0: f64, dt_half: f64, out: &mut Vec<f64>, n: usize) {
+        out.clear();
+        out.resize(n, 0.0);
+        for h in 0..3 {
+            let a = self.ripple_bar[h];
+            if a == 0.0 {
+                continue;
+            }
+            let w = std::f64::consts::TAU * self.ripple_hz * (h + 1) as f64;
+            let (mut s, mut c) = (w * t0 + self.ripple_phase[h]).sin_cos();
+            let (ds, dc) = (w * dt_half).sin_cos();
+            for o in out.iter_mut() {
+                *o += a * s;
+                (s, c) = (s * dc + c * ds, c * dc - s * ds);
+            }
+        }
+    }
+
     /// Quasi-static tank pressure at return flow `q` (m³/s), bar.
     #[inline]
     pub fn tank_static(&self, q: f64) -> f64 {

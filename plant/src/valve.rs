@@ -102,20 +102,22 @@ impl ValveSpec {
         let dp = [ps - pa, pa - pt, ps - pb, pb - pt];
         let mut q = [0.0; 4];
         let dpt2 = self.transition_dp_bar * self.transition_dp_bar;
+        // exp(−(cover − overlap)/w) = exp(±s/w) while the edge is covered:
+        // one exponential serves all four edges.
+        let grow = (s / self.land_leak_decay).exp();
+        let growth = [grow, 1.0 / grow, 1.0 / grow, grow];
         for e in 0..4 {
             let ov = self.overlap[e];
             let cover = ov - travel[e];
-            let open = (-cover).max(0.0) / (1.0 - ov);
             let d = dp[e];
-            let turb = if open > 0.0 {
-                self.flow_gain_lpm_sqrt_bar[e] * open * d / (d * d + dpt2).sqrt().sqrt()
+            let (turb, factor) = if cover < 0.0 {
+                let open = -cover / (1.0 - ov);
+                let turb = self.flow_gain_lpm_sqrt_bar[e] * open * d / (d * d + dpt2).sqrt().sqrt();
+                (turb, (ov / self.land_leak_decay).exp()) // open: rare
             } else {
-                0.0
+                (0.0, growth[e])
             };
-            let leak = self.land_leak_lpm_per_bar[e]
-                * (-(cover.max(0.0) - ov) / self.land_leak_decay).exp()
-                * d
-                * fluidity;
+            let leak = self.land_leak_lpm_per_bar[e] * factor * d * fluidity;
             q[e] = (turb + leak) * LPM;
         }
         q
