@@ -82,6 +82,7 @@ pub fn simulate_with_report(run: &Run) -> (Vec<Row>, RunReport) {
         onset_s: run.leak.onset_s,
         temp_rate_c_s: temp_rate(run),
         sample_rate_hz: run.sample_rate_hz,
+        quiet_step: true,
     };
     let targets = [run.leak.internal_lpm, run.leak.external_lpm];
     // First guess: the law at a third of the supply pressure.
