@@ -113,3 +113,56 @@ impl Profile {
         self.knots[0].1
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sample(p: &mut Profile, dt: f64) -> Vec<(f64, f64)> {
+        let n = (p.duration_s / dt) as usize;
+        (0..n).map(|k| p.at(k as f64 * dt)).collect()
+    }
+
+    #[test]
+    fn work_cycles_stay_in_range_move_both_ways_at_the_drawn_speeds() {
+        for seed in 0..20 {
+            let mut p = Profile::new(&Scenario::ClosedLoop {
+                duration_s: 120.0,
+                seed,
+            });
+            let s = sample(&mut p, 0.01);
+            assert!(s
+                .iter()
+                .all(|&(x, _)| (WORK_RANGE_M[0]..=WORK_RANGE_M[1]).contains(&x)));
+            let vmax = s.iter().map(|&(_, v)| v.abs()).fold(0.0, f64::max);
+            assert!(vmax <= 0.1 + 1e-9, "{vmax}");
+            assert!(s.iter().any(|&(_, v)| v > 0.004));
+            assert!(s.iter().any(|&(_, v)| v < -0.004));
+            let moving = s.iter().filter(|&&(_, v)| v != 0.0).count();
+            assert!(moving > 0 && moving < s.len());
+        }
+    }
+
+    #[test]
+    fn a_long_hold_holds_mid_stroke_for_its_length() {
+        for seed in 0..5 {
+            let mut p = Profile::new(&Scenario::LongHold {
+                hold_s: 600.0,
+                seed,
+            });
+            let s = sample(&mut p, 0.1);
+            // The longest run of a constant setpoint.
+            let (mut best, mut run) = (0, 0);
+            for w in s.windows(2) {
+                run = if w[1].0 == w[0].0 { run + 1 } else { 0 };
+                best = best.max(run);
+            }
+            // The hold, then the first 1–8 s hold of the moves after it.
+            let held = best as f64 * 0.1;
+            assert!((599.8..=608.2).contains(&held), "{held}");
+            assert!(p.duration_s > 616.0 && p.duration_s < 640.0);
+            let x_hold = s[s.len() / 2].0;
+            assert!((0.06..=0.12).contains(&x_hold));
+        }
+    }
+}

@@ -322,3 +322,53 @@ fn the_crate_does_not_depend_on_the_monitor() {
         assert!(!src.contains("monitor::"));
     }
 }
+
+#[test]
+fn the_supply_collapses_when_the_valve_asks_more_than_the_pump_gives() {
+    let mut rig = RigSpec::random(81, 150.0, 25.0);
+    rig.supply.pump_max_lpm = 25.0;
+    rig.supply.ripple_bar = [0.0; 3];
+    let droop = rig.supply.droop_bar;
+    let rows = simulate(&run(
+        rig,
+        Scenario::StepTest {
+            duration_s: 2.0,
+            step_at_s: 0.5,
+            amplitude: -1.0,
+        },
+        Leak::default(),
+        1,
+    ));
+    let before = rows[400].truth.p_supply_bar;
+    let during = rows
+        .iter()
+        .filter(|r| !r.truth.at_end_stop && r.t > 0.6)
+        .map(|r| r.truth.p_supply_bar)
+        .fold(f64::MAX, f64::min);
+    assert!(before > 150.0 - droop, "{before}");
+    assert!(
+        during < 150.0 - droop - 20.0,
+        "supply only fell to {during} bar"
+    );
+    // Back to the set pressure against the stop.
+    assert!(rows.last().unwrap().truth.p_supply_bar > 150.0 - droop);
+}
+
+#[test]
+fn time_stamps_are_the_sample_instants() {
+    let r = run(
+        RigSpec::random(82, 50.0, 25.0),
+        rest(0.25),
+        Leak::default(),
+        1,
+    );
+    let mut r500 = r.clone();
+    r500.sample_rate_hz = 500.0;
+    for (run, dt) in [(r, 1e-3f64), (r500, 2e-3)] {
+        let rows = simulate(&run);
+        assert_eq!(rows.len(), (0.25 / dt).round() as usize);
+        for (k, row) in rows.iter().enumerate() {
+            assert!((row.t - k as f64 * dt).abs() < 1e-12);
+        }
+    }
+}
