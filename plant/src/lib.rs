@@ -335,6 +335,13 @@ pub struct Row {
     pub truth: Truth,
 }
 
+/// Length of the recording `scenario` produces, s (a long hold adds its
+/// moves before and after the hold, drawn from its seed: 17–31 s plus the
+/// ramp to the hold position).
+pub fn planned_duration_s(scenario: &Scenario) -> f64 {
+    scenario::Profile::new(scenario).duration_s
+}
+
 /// Simulate `run`: one row per sample.
 pub fn simulate(run: &Run) -> Vec<Row> {
     simulate_with_report(run).0

@@ -372,3 +372,25 @@ fn time_stamps_are_the_sample_instants() {
         }
     }
 }
+
+#[test]
+fn degenerate_runs_do_not_panic() {
+    let rig = RigSpec::random(83, 50.0, 25.0);
+    assert!(simulate(&run(rig.clone(), rest(0.0), Leak::default(), 1)).is_empty());
+    // A leak whose onset is after the end: no leak in the rows.
+    let leak = Leak {
+        internal_lpm: 0.5,
+        external_lpm: 0.5,
+        onset_s: 10.0,
+    };
+    let rows = simulate(&run(rig.clone(), rest(0.3), leak, 1));
+    assert!(rows
+        .iter()
+        .all(|r| r.truth.internal_lpm == 0.0 && r.truth.external_lpm == 0.0));
+    let s = Scenario::LongHold {
+        hold_s: 1.0,
+        seed: 2,
+    };
+    let d = planned_duration_s(&s);
+    assert!(d > 18.0 && d < 40.0, "{d}");
+}
