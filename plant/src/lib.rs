@@ -67,9 +67,10 @@
 //!
 //! # Speed (release, one core, CPU time on the shared 2-core dev box)
 //! - 60 s closed loop, no leak: 0.39–0.55 s (110–150× real time);
-//!   with a leak (2 calibration passes): 0.8–0.9 s (≈ 70×).
-//! - 10-min long hold, no leak: 3.1–3.4 s (≈ 185×); with a leak: 6.6 s
-//!   (≈ 90×). Wall-clock time doubled while the machine was shared.
+//!   with a leak (2 calibration passes; rarely 3–6): 0.8–1.0 s (60–75×).
+//! - 10-min long hold, no leak: 3.1–3.4 s (≈ 185×); with a leak (2
+//!   passes): 6.6–7.1 s (85–90×). Wall-clock time was up to 2× longer
+//!   while the machine was shared (load ≈ 5 on 2 cores).
 //! - Integration: RK4 at 50 µs, 100 µs in quiet samples (valve ≤ 8 %
 //!   open, |v| < 30 mm/s, clear of the stops); a 3 s pre-roll settles
 //!   the machine before the recording starts.
