@@ -126,8 +126,8 @@ pub struct TruthSummary {
     /// (`filter.detection_window_s`), first reached the alarm level at or
     /// after onset, s.
     pub flowing_s: Option<f64>,
-    /// End of the longest hold (≥ 5 s still), s.
-    pub hold_end_s: Option<f64>,
+    /// Start and end of the longest hold (≥ 5 s still), s.
+    pub hold_s: Option<[f64; 2]>,
     /// First instant at or after 20 s at which the piston has been moving
     /// for 0.3 s, s.
     pub mid_move_s: Option<f64>,
@@ -179,6 +179,35 @@ pub struct RunResult {
     pub cached: bool,
     /// Wall time to simulate (or load) and replay, s.
     pub wall_s: f64,
+}
+
+impl RunResult {
+    /// A result with nothing observed yet (verdict `healthy`, no alarm):
+    /// the start of a replay, and hand-made results in tests.
+    pub fn empty(spec: RunSpec, alarm_lpm: f64) -> Self {
+        Self {
+            spec,
+            params: "",
+            samples: 0,
+            verdict: monitor::Verdict::Healthy.name().to_string(),
+            first_alarm: None,
+            alarms: Vec::new(),
+            sensor_faults: Vec::new(),
+            est_lpm: [None; 2],
+            nis_leading_mean: None,
+            nis_leading_end: f64::NAN,
+            evidence_fraction: 0.0,
+            filter_resets: 0,
+            data_gaps: 0,
+            peak_detect_lpm: [0.0; 2],
+            fault_verdicts: BTreeMap::new(),
+            sensor_fault_verdict_s: None,
+            alarm_lpm,
+            truth: TruthSummary::default(),
+            cached: false,
+            wall_s: 0.0,
+        }
+    }
 }
 
 /// The whole evaluation.
@@ -539,28 +568,7 @@ pub fn replay_text(spec: &RunSpec, text: &[u8], params: &Params) -> Result<RunRe
     };
     let window = fault_window(&spec.faults).filter(|_| spec.category == Category::Fault);
     let warm_up = params.filter.warm_up_s;
-    let mut res = RunResult {
-        spec: spec.clone(),
-        params: "",
-        samples: 0,
-        verdict: String::new(),
-        first_alarm: None,
-        alarms: Vec::new(),
-        sensor_faults: Vec::new(),
-        est_lpm: [None; 2],
-        nis_leading_mean: None,
-        nis_leading_end: f64::NAN,
-        evidence_fraction: 0.0,
-        filter_resets: 0,
-        data_gaps: 0,
-        peak_detect_lpm: [0.0; 2],
-        fault_verdicts: BTreeMap::new(),
-        sensor_fault_verdict_s: None,
-        alarm_lpm: params.alarm.alarm_lpm,
-        truth: TruthSummary::default(),
-        cached: false,
-        wall_s: 0.0,
-    };
+    let mut res = RunResult::empty(spec.clone(), params.alarm.alarm_lpm);
     let mut t_true: Vec<f64> = Vec::new();
     let mut q: Vec<[f32; 3]> = Vec::new();
     let mut last_t = f64::NEG_INFINITY;
@@ -711,7 +719,7 @@ pub fn truth_summary(spec: &RunSpec, t: &[f64], q: &[[f32; 3]], params: &Params)
         last_lpm: mean_where(t, q, |ti| ti >= t_end - SIZE_SPAN_S),
         after_onset_lpm: mean_where(t, q, |ti| ti >= onset),
         flowing_s,
-        hold_end_s: best_hold.map(|(_, b)| b),
+        hold_s: best_hold.map(|(a, b)| [a, b]),
         mid_move_s,
     }
 }
@@ -720,9 +728,14 @@ pub fn truth_summary(spec: &RunSpec, t: &[f64], q: &[[f32; 3]], params: &Params)
 pub fn place(f: &Follower, twin: &TruthSummary) -> RunSpec {
     let mut s = f.spec.clone();
     match f.placement {
-        Placement::OnsetAtHoldEnd { fallback_s } => {
-            let (t, how) = match twin.hold_end_s {
-                Some(t) => (t, format!("onset at the end of the twin's hold, {t:.2} s")),
+        Placement::OnsetAfterHold { hold_s, fallback_s } => {
+            let (t, how) = match twin.hold_s {
+                Some([a, b]) => (
+                    a + hold_s,
+                    format!(
+                        "onset {hold_s} s after the twin's hold began ({a:.2} s; still until {b:.2} s)"
+                    ),
+                ),
                 None => (
                     fallback_s,
                     format!("no hold in the twin: onset at {fallback_s} s"),

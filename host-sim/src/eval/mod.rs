@@ -313,9 +313,11 @@ impl RunSpec {
 /// A time of a follower run placed from its twin's truth.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub enum Placement {
-    /// The leak starts where the twin's longest hold ends (`fallback_s` if
-    /// it has none).
-    OnsetAtHoldEnd {
+    /// The leak starts `hold_s` after the twin's longest hold began, i.e.
+    /// after that long holding (`fallback_s` if the twin shows no hold).
+    OnsetAfterHold {
+        /// Length of the hold, s.
+        hold_s: f64,
         /// Onset if the twin shows no hold, s.
         fallback_s: f64,
     },
@@ -381,6 +383,11 @@ pub fn fnv1a64(bytes: &[u8]) -> u64 {
 /// A seed derived from a description of what it is for, so that a run's
 /// seeds depend on the run, not on its position in the matrix.
 pub fn seed_of(what: &str) -> u64 {
-    // Keep seeds below 2^53 so they survive JSON readers that use doubles.
-    fnv1a64(what.as_bytes()) >> 11
+    // FNV mixes a string's last bytes poorly into the high bits: finish
+    // with SplitMix64's mixer. Keep seeds below 2^53 so they survive JSON
+    // readers that use doubles.
+    let mut z = fnv1a64(what.as_bytes());
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    (z ^ (z >> 31)) >> 11
 }

@@ -227,7 +227,7 @@ pub fn fault_window(faults: &[Fault]) -> Option<(f64, Option<f64>)> {
 /// step tests with a leak (internal on even rigs, external on odd) of each
 /// size in [`STEP_LEAK_LPM`]. On one cell per rig (rotating through the
 /// conditions): a healthy long hold and the same hold with a 0.3 l/min leak
-/// starting as the moves resume, and every fault on the first healthy
+/// starting after 600 s of holding, and every fault on the first healthy
 /// closed-loop run's plant. `--quick`: one cell per rig (rotating), one
 /// healthy closed-loop run, 0.2 and 0.5 l/min single leaks, 0.5 l/min both,
 /// a 1.0 l/min step-test leak, a 120 s hold and four faults.
@@ -361,8 +361,9 @@ fn cell_jobs(b: &CellRuns, quick: bool, special: bool, rig: u64, jobs: &mut Vec<
     if !special {
         return;
     }
-    // The long hold, healthy, and with a leak starting as the moves resume
-    // (same motion and noise seeds: identical until the onset).
+    // The long hold, healthy, and with a leak starting once the piston has
+    // held for `hold_s` (same motion and noise seeds: identical until the
+    // onset; the plant's hold is followed by 8-15 s of work cycle).
     let hold_s = if quick { QUICK_HOLD_S } else { HOLD_S };
     let hold = Scenario::LongHold {
         hold_s,
@@ -382,7 +383,7 @@ fn cell_jobs(b: &CellRuns, quick: bool, special: bool, rig: u64, jobs: &mut Vec<
         head,
         followers: vec![Follower {
             spec: after,
-            placement: Placement::OnsetAtHoldEnd { fallback_s },
+            placement: Placement::OnsetAfterHold { hold_s, fallback_s },
         }],
     });
     // Faults, on the plant (motion and noise seeds) of the first healthy run.

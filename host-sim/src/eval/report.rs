@@ -199,7 +199,7 @@ pub fn leak_table(out: &mut String, runs: &[&RunResult]) {
     }
     let _ = writeln!(
         out,
-        "\nLeaks start at {ONSET_S} s (0.3 l/min also from the start: detection, isolation and size counted, latency not); the after-the-hold leak starts where the healthy twin's long hold ends.\n"
+        "\nLeaks start at {ONSET_S} s (0.3 l/min also from the start: detection, isolation and size counted, latency not); the after-the-hold leak starts once the piston has held for the hold's length (600 s; `--quick`: 120 s), located in the healthy twin's truth; the plant's work cycle resumes 1–8 s later and the run ends 8–15 s after the hold.\n"
     );
 }
 
