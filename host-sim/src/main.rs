@@ -4,7 +4,7 @@
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
-use host_sim::eval::{self, Case, EvalConfig};
+use host_sim::eval::{self, SetChoice};
 use host_sim::recording::{RecordingReader, RecordingWriter};
 use host_sim::replay::{print_summary, replay, TraceWriter};
 use host_sim::sim::{perturbed_rig, LeakLaw, Profile, Rig, Scenario, Simulation};
@@ -128,65 +128,47 @@ enum Command {
         #[arg(long)]
         dump_rig: Option<PathBuf>,
     },
-    /// Simulate a matrix of rigs, conditions and leaks and tabulate how the
-    /// monitor does.
+    /// Evaluate the monitor on the independent test plant: rigs × supply ×
+    /// temperature cells, each calibrated from its own healthy recording;
+    /// healthy, leak, step-test, long-hold and fault runs; a Markdown
+    /// report per rig set (development / held-out) against the targets.
     Eval {
+        /// Rig set: the development rigs, the held-out rigs (fixed in
+        /// advance; report only, never tune on them), or both.
+        #[arg(long, value_enum, default_value_t = SetChoice::Dev)]
+        set: SetChoice,
+        /// Only the first N rigs of each set.
+        #[arg(long, value_name = "N")]
+        rigs: Option<usize>,
         /// Supply pressures, bar.
         #[arg(long, value_delimiter = ',', default_values_t = [50.0, 100.0])]
         supply: Vec<f64>,
         /// Oil temperatures, °C.
         #[arg(long, value_delimiter = ',', default_values_t = [25.0, 40.0])]
         temp: Vec<f64>,
-        /// Leak kinds: healthy, internal, external, both.
-        #[arg(long, value_delimiter = ',', default_values_t = ["healthy".to_string(), "internal".to_string(), "external".to_string(), "both".to_string()])]
-        kinds: Vec<String>,
-        /// Leak sizes, l/min (mean flow after onset).
-        #[arg(long, value_delimiter = ',', default_values_t = [0.03, 0.05, 0.1, 0.2, 0.3, 0.5, 1.0])]
-        sizes: Vec<f64>,
-        /// Leak onsets, s (0 = from the start).
-        #[arg(long, value_delimiter = ',', default_values_t = [0.0, 30.0])]
-        onsets: Vec<f64>,
-        /// Healthy runs per rig and condition.
-        #[arg(long, default_value_t = 1)]
-        healthy_runs: u64,
-        /// Number of rig variations.
-        #[arg(long, default_value_t = 3)]
-        rigs: u64,
-        /// First rig seed.
-        #[arg(long, default_value_t = 1)]
-        first_rig: u64,
-        /// Use the reference rig itself as rig 0.
+        /// The smaller development matrix (one condition per rig, fewer
+        /// sizes, a 120 s hold, four faults).
         #[arg(long)]
-        nominal_rig: bool,
-        /// Give the monitor the nominal parameters instead of calibrating
-        /// each rig from its own healthy recording.
-        #[arg(long)]
-        no_calibration: bool,
-        /// Write the oil temperature column: never, always, or both (each
-        /// case twice).
-        #[arg(long, default_value = "never")]
-        temp_column: String,
-        /// Run length, s.
-        #[arg(long, default_value_t = 60.0)]
-        duration: f64,
-        /// Motion profile: thesis, random, steps, hold.
-        #[arg(long, default_value = "thesis")]
-        profile: String,
-        /// Leak flow law: laminar or orifice.
-        #[arg(long, default_value = "laminar")]
-        law: String,
-        /// Monitor parameters to start from (default nominal).
+        quick: bool,
+        /// Worker threads [default: the available cores].
+        #[arg(long, value_name = "N")]
+        jobs: Option<usize>,
+        /// Cache the simulated recordings here (keyed by the plant run): a
+        /// re-run re-calibrates and re-replays but does not re-simulate.
+        #[arg(long, value_name = "DIR")]
+        cache: Option<PathBuf>,
+        /// Write every cell's calibration and every run's result here (JSON).
+        #[arg(long, value_name = "FILE")]
+        json: Option<PathBuf>,
+        /// Write the Markdown report here [default: standard output].
+        #[arg(short, long, value_name = "FILE")]
+        output: Option<PathBuf>,
+        /// Parameters to calibrate from [default: the reference rig's].
         #[arg(long)]
         params: Option<PathBuf>,
-        /// Worker threads.
-        #[arg(long, default_value_t = 2)]
-        threads: usize,
-        /// Cache simulated recordings and calibrations here (re-runs replay).
+        /// Give every cell the start parameters instead of calibrating it.
         #[arg(long)]
-        cache: Option<PathBuf>,
-        /// Write every run's result as JSON lines here.
-        #[arg(long)]
-        out: Option<PathBuf>,
+        no_calibration: bool,
     },
     /// Decode the leak monitor's CAN frames in a candump log
     /// (`candump -l`: `(sec.usec) iface id#hex`), checking every frame's
@@ -382,6 +364,84 @@ fn decode(log: &std::path::Path, json: bool, strict: bool) -> Result<ExitCode> {
     })
 }
 
+/// The `eval` subcommand's arguments.
+struct EvalArgs {
+    set: SetChoice,
+    rigs: Option<usize>,
+    supply: Vec<f64>,
+    temp: Vec<f64>,
+    quick: bool,
+    jobs: Option<usize>,
+    cache: Option<PathBuf>,
+    json: Option<PathBuf>,
+    output: Option<PathBuf>,
+    params: Option<PathBuf>,
+    no_calibration: bool,
+}
+
+/// `host-sim eval`: plan, execute with a progress bar on stderr, report.
+fn run_eval(a: EvalArgs) -> Result<ExitCode> {
+    anyhow::ensure!(
+        !a.supply.is_empty() && a.supply.iter().all(|p| p.is_finite() && *p > 0.0),
+        "--supply must be pressures > 0 bar"
+    );
+    anyhow::ensure!(
+        !a.temp.is_empty() && a.temp.iter().all(|t| t.is_finite()),
+        "--temp must be temperatures in °C"
+    );
+    anyhow::ensure!(a.rigs != Some(0), "--rigs must be at least 1");
+    anyhow::ensure!(a.jobs != Some(0), "--jobs must be at least 1");
+    let plan = eval::plan(&eval::PlanConfig {
+        sets: a.set.sets(),
+        rigs: a.rigs,
+        supply_bar: a.supply,
+        temp_c: a.temp,
+        quick: a.quick,
+        ..eval::PlanConfig::default()
+    });
+    let mut cfg = eval::ExecConfig {
+        start: host_sim::load_params_or_nominal(a.params.as_deref())?,
+        calibrate: !a.no_calibration,
+        cache: a.cache,
+        ..eval::ExecConfig::default()
+    };
+    if let Some(j) = a.jobs {
+        cfg.jobs = j;
+    }
+    let total = plan.cells.len() + plan.runs();
+    // Drawn on a terminal only (stderr); logs get the summary line below.
+    let bar = indicatif::ProgressBar::new(total as u64).with_style(
+        indicatif::ProgressStyle::with_template(
+            "{bar:40} {pos}/{len} calibrations and runs, {elapsed} (about {eta} left)",
+        )?,
+    );
+    let progress = |done: usize, _total: usize| bar.set_position(done as u64);
+    let ev = eval::run_plan(&plan, &cfg, &progress)?;
+    bar.finish_and_clear();
+    eprintln!(
+        "{} cells, {} runs in {:.0} s on {} threads",
+        ev.cells.len(),
+        ev.runs.len(),
+        ev.wall_s,
+        ev.jobs
+    );
+    if let Some(path) = &a.json {
+        let f = std::fs::File::create(path)
+            .with_context(|| format!("{}: cannot create", path.display()))?;
+        let mut w = std::io::BufWriter::new(f);
+        serde_json::to_writer(&mut w, &ev)?;
+        writeln!(w)?;
+        w.flush()?;
+    }
+    let report = eval::report::markdown(&ev);
+    match &a.output {
+        Some(path) => std::fs::write(path, report)
+            .with_context(|| format!("{}: cannot write", path.display()))?,
+        None => print!("{report}"),
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
 fn run(cli: Cli) -> Result<ExitCode> {
     match cli.command {
         Command::Decode { log, json, strict } => decode(&log, json, strict),
@@ -449,129 +509,30 @@ fn run(cli: Cli) -> Result<ExitCode> {
             Ok(ExitCode::SUCCESS)
         }
         Command::Eval {
+            set,
+            rigs,
             supply,
             temp,
-            kinds,
-            sizes,
-            onsets,
-            healthy_runs,
-            rigs,
-            first_rig,
-            nominal_rig,
-            no_calibration,
-            temp_column,
-            duration,
-            profile,
-            law,
-            params,
-            threads,
+            quick,
+            jobs,
             cache,
-            out,
-        } => {
-            let params = host_sim::load_params_or_nominal(params.as_deref())?;
-            let kind_name = |k: &str| -> Result<&'static str> {
-                Ok(match k {
-                    "healthy" => "healthy",
-                    "internal" => "internal",
-                    "external" => "external",
-                    "both" => "both",
-                    _ => anyhow::bail!("unknown leak kind `{k}`"),
-                })
-            };
-            let profile: &'static str = match profile.as_str() {
-                "thesis" => "thesis",
-                "random" => "random",
-                "steps" => "steps",
-                "hold" => "hold",
-                p => anyhow::bail!("unknown profile `{p}`"),
-            };
-            let law: &'static str = match law.as_str() {
-                "laminar" => "laminar",
-                "orifice" => "orifice",
-                l => anyhow::bail!("unknown leak law `{l}`"),
-            };
-            let temp_columns: &[bool] = match temp_column.as_str() {
-                "never" => &[false],
-                "always" => &[true],
-                "both" => &[false, true],
-                t => anyhow::bail!("--temp-column must be never, always or both, not `{t}`"),
-            };
-            let mut cases = Vec::new();
-            for rig in first_rig..first_rig + rigs {
-                for &sup in &supply {
-                    for &tc in &temp {
-                        for &with_temp in temp_columns {
-                            for k in &kinds {
-                                let kind = kind_name(k)?;
-                                let runs: Vec<(f64, f64, u64)> = if kind == "healthy" {
-                                    (0..healthy_runs).map(|r| (0.0, 0.0, r)).collect()
-                                } else {
-                                    sizes
-                                        .iter()
-                                        .flat_map(|&s| onsets.iter().map(move |&o| (s, o, 0)))
-                                        .collect()
-                                };
-                                for (size, onset, rep) in runs {
-                                    // Seeds depend on the case, not its position in the matrix.
-                                    let seed = 10_000 * rig
-                                        + 1_000 * (sup as u64 / 50)
-                                        + 100 * (tc as u64 / 5)
-                                        + (size * 1000.0) as u64
-                                        + onset as u64
-                                        + 37 * rep;
-                                    cases.push(Case {
-                                        rig,
-                                        supply_bar: sup,
-                                        temp_c: tc,
-                                        with_temp,
-                                        kind,
-                                        size_lpm: size,
-                                        onset_s: onset,
-                                        seed,
-                                        law,
-                                        profile,
-                                        duration_s: duration,
-                                    });
-                                }
-                            }
-                        }
-                    }
-                }
-            }
-            let cfg = EvalConfig {
-                params,
-                calibrate: !no_calibration,
-                nominal_rig,
-                cache,
-                threads,
-            };
-            let start = std::time::Instant::now();
-            // Drawn on a terminal only; logs get the one summary line below.
-            let bar = indicatif::ProgressBar::new(cases.len() as u64).with_style(
-                indicatif::ProgressStyle::with_template(
-                    "{bar:40} {pos}/{len} runs, {elapsed} (about {eta} left)",
-                )?,
-            );
-            let progress = |d: usize, _n: usize| bar.set_position(d as u64);
-            let results = eval::run_all(&cases, &cfg, &progress)?;
-            bar.finish_and_clear();
-            eprintln!(
-                "{} runs in {:.0} s",
-                results.len(),
-                start.elapsed().as_secs_f64()
-            );
-            if let Some(path) = out {
-                let mut f = std::io::BufWriter::new(std::fs::File::create(&path)?);
-                for r in &results {
-                    serde_json::to_writer(&mut f, r)?;
-                    writeln!(f)?;
-                }
-            }
-            print!("{}", eval::table(&results));
-            println!();
-            print!("{}", eval::by_condition(&results));
-            Ok(ExitCode::SUCCESS)
-        }
+            json,
+            output,
+            params,
+            no_calibration,
+        } => run_eval(EvalArgs {
+            set,
+            rigs,
+            supply,
+            temp,
+            quick,
+            jobs,
+            cache,
+            json,
+            output,
+            params,
+            no_calibration,
+        }),
         Command::Simulate {
             output,
             profile,
