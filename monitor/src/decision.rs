@@ -75,8 +75,10 @@ pub struct Decision<T> {
     latched: Verdict,
     warning: bool,
     mismatch: bool,
-    alarm_lpm: T,
-    warning_lpm: T,
+    /// Alarm and warning levels per leak (internal, external), l/min: the
+    /// user's levels, raised to the installation's detection floor.
+    alarm_lpm: [T; 2],
+    warning_lpm: [T; 2],
     debounce_s: T,
     min_probability: T,
     /// Per leak (internal, external): the healthy baseline coefficient per
@@ -117,8 +119,15 @@ impl<T: Real> Decision<T> {
             latched: Verdict::Healthy,
             warning: false,
             mismatch: false,
-            alarm_lpm: T::c(params.alarm.alarm_lpm),
-            warning_lpm: T::c(params.alarm.warning_lpm),
+            alarm_lpm: params
+                .baseline
+                .detection_floor_lpm
+                .map(|floor| T::c(params.alarm.alarm_lpm.max(floor))),
+            warning_lpm: params.baseline.detection_floor_lpm.map(|floor| {
+                // The warning keeps its ratio to the alarm level.
+                let a = &params.alarm;
+                T::c(a.warning_lpm * a.alarm_lpm.max(floor) / a.alarm_lpm)
+            }),
             debounce_s: T::c(params.alarm.debounce_s),
             min_probability: T::c(params.alarm.min_probability),
             baseline: [
@@ -228,7 +237,8 @@ impl<T: Real> Decision<T> {
         let mut new_leak = [false; 2];
         for k in 0..2 {
             let excess = if self.supports(k) {
-                ((self.fast[k] - self.alarm_lpm) / self.alarm_lpm).clamp_to(-T::ONE, T::c(4.0))
+                ((self.fast[k] - self.alarm_lpm[k]) / self.alarm_lpm[k])
+                    .clamp_to(-T::ONE, T::c(4.0))
             } else {
                 -T::ONE
             };
@@ -246,10 +256,11 @@ impl<T: Real> Decision<T> {
                 let _ = events.push(Event::AlarmRaised(merged));
             }
         }
-        let level = self.slow[0].max(self.slow[1]);
-        let off = self.warning_lpm * T::c(0.8);
-        self.warning = !self.latched.is_leak()
-            && (level >= self.warning_lpm || (self.warning && level >= off));
+        // Each leak against its own warning level, with hysteresis.
+        let over = |k: usize, scale: T| self.slow[k] >= self.warning_lpm[k] * scale;
+        let level_reached = over(0, T::ONE) || over(1, T::ONE);
+        let still = over(0, T::c(0.8)) || over(1, T::c(0.8));
+        self.warning = !self.latched.is_leak() && (level_reached || (self.warning && still));
         self.mismatch = self.nis[self.leading as usize] > T::c(MISMATCH_NIS);
         if weight < T::c(0.5) {
             health::EVIDENCE_PAUSED

@@ -26,6 +26,7 @@
 
 pub mod alarm;
 pub mod bank;
+pub mod consistency;
 pub mod deadline;
 pub mod decision;
 pub mod ekf;

@@ -3,6 +3,7 @@
 //! bit, on any IEEE-754 machine (see `real.rs`).
 
 use crate::bank::{Bank, BankOutput, Measurement, ProcessNoise, StepContext, NB, NZ};
+use crate::consistency::NoiseMatch;
 use crate::decision::Decision;
 use crate::fluid::laminar_flow_factor;
 use crate::hypothesis::Hypothesis;
@@ -69,6 +70,8 @@ pub struct Monitor<T: Real = f32> {
     /// states and the weight of each sample as evidence (see `quiet`).
     quiet: Quietness<T>,
     fluid_ref: crate::params::Fluid,
+    /// Innovation statistics that size the measurement noise.
+    matching: NoiseMatch<T>,
 }
 
 impl<T: Real> Monitor<T> {
@@ -150,6 +153,7 @@ impl<T: Real> Monitor<T> {
                 f.learning_recovery_s,
             ),
             fluid_ref: params.fluid.clone(),
+            matching: NoiseMatch::default(),
         })
     }
 
@@ -227,6 +231,7 @@ impl<T: Real> Monitor<T> {
             self.warming = true;
             self.decision.restart();
             self.quiet.restart();
+            self.matching.restart();
             return self.status(
                 sample.t_s,
                 checked.faulted,
@@ -281,6 +286,10 @@ impl<T: Real> Monitor<T> {
                 let _ = events.push(Event::FilterReset(h));
             }
         }
+        if let Some(b) = &ok[Hypothesis::Both as usize] {
+            self.matching
+                .update(&b.innovation_sq, &b.predicted_var, &m.r, T::c(dt));
+        }
         if let Some(h) = &ok[0] {
             let s = bank.plant_state(Hypothesis::Healthy);
             let bar = T::c(P_REF / BAR);
@@ -334,10 +343,12 @@ impl<T: Real> Monitor<T> {
     fn measurement(&self, c: &Conditioned) -> Measurement<T> {
         // Each reading's noise as estimated from the data (`signal::noise`).
         let sigma = self.checker.noise_sigma();
-        let r: [T; NZ] = core::array::from_fn(|k| {
+        let white: [T; NZ] = core::array::from_fn(|k| {
             let s = T::from_f32(sigma[k]) * self.cfg.r_scale[k];
             s * s
         });
+        // What the innovations show beyond the white noise (`consistency`).
+        let r = self.matching.matched(&white);
         Measurement {
             z: [
                 T::from_f32(c.x_piston_m) / T::c(X_REF),

@@ -209,6 +209,14 @@ params_struct! {
         /// Apparent external leak coefficient per region, l/min at 10 bar
         /// from the rod side to tank.
         pub external_lpm_per_10bar: [f64; 3] = [0.0; 3],
+        /// The installation's detection floor per leak `[internal,
+        /// external]`, l/min: how far the leak readings of the leak-free
+        /// installation still wander (model error the baseline cannot
+        /// remove), measured by calibration on a part of its recording it
+        /// did not fit. A leak alarms only above the larger of this and
+        /// `alarm.alarm_lpm` — the smallest leak this installation can be
+        /// trusted to tell. 0: no floor.
+        pub detection_floor_lpm: [f64; 2] = [0.0; 2],
     }
 }
 
@@ -283,8 +291,9 @@ params_struct! {
         /// (nested hypotheses: a free leak always fits a little better).
         pub complexity_penalty_per_s: f64 = 2.0,
         /// After a (re)start no alarm is raised for this long while the
-        /// filters converge, s.
-        pub warm_up_s: f64 = 10.0,
+        /// filters converge, s. Short enough that a 10 s valve step test
+        /// (step at 3 s) ends conclusive.
+        pub warm_up_s: f64 = 2.0,
         /// Estimated chamber-pressure rate at which a sample counts half as
         /// evidence and the valve and leak parameters learn at half weight,
         /// bar/s (see `quiet.rs`; 0 disables the weighting).
@@ -607,6 +616,17 @@ impl Params {
                     problem: "entries must be finite and within ±1 l/min at 10 bar",
                 });
             }
+        }
+        if self
+            .baseline
+            .detection_floor_lpm
+            .iter()
+            .any(|v| !(v.is_finite() && (0.0..=10.0).contains(v)))
+        {
+            return Err(ParamError {
+                field: "baseline.detection_floor_lpm",
+                problem: "entries must be within 0..=10 l/min",
+            });
         }
         for (name, arr) in [
             ("load.masses_kg", &self.load.masses_kg),

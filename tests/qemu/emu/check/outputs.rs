@@ -39,10 +39,14 @@ pub fn replay(case: &EmuCase, log: &Log, f: &mut Findings) {
     }
 }
 
+/// After the warm-up, the monitor needs at most this many samples of a
+/// quiet healthy recording to claim healthy.
+const EVIDENCE_SAMPLES: u32 = 3_000;
+
 /// The relay: written de-energised before the first sample; then changed
 /// exactly where the host's alarm output changes it; off during the
-/// warm-up and energised at its end (unless the golden raised an alarm
-/// by then); always agreeing with the alarm frames; de-energised when
+/// warm-up and energised within [`EVIDENCE_SAMPLES`] after it (unless the
+/// golden raised an alarm by then); always agreeing with the alarm frames; de-energised when
 /// the estimator stalls.
 pub fn relay(case: &EmuCase, log: &Log, frames: &Frames, f: &mut Findings) {
     let (Some(t0), Some(t_end)) = (log.t0, last_block(case, log)) else {
@@ -85,15 +89,21 @@ pub fn relay(case: &EmuCase, log: &Log, frames: &Frames, f: &mut Findings) {
         ));
     }
     // Independently of the host's run: off through the warm-up, then
-    // energised at its end unless the golden raised an alarm by then.
+    // energised once the monitor has seen enough evidence to claim healthy
+    // (`healthy` is a claim: `filter.min_evidence_s` of quasi-steady data
+    // after the warm-up), unless the golden raised an alarm by then.
     let warm_up = case.warm_up_samples();
     let early_alarm = EmuCase::decoded(case.golden_events)
-        .any(|(k, e)| k <= warm_up && matches!(e, Event::AlarmRaised(_)));
-    if !early_alarm && firmware.first() != Some(&(warm_up, true)) {
+        .any(|(k, e)| k <= warm_up + EVIDENCE_SAMPLES && matches!(e, Event::AlarmRaised(_)));
+    let energised_in_time = matches!(
+        firmware.first(),
+        Some(&(k, true)) if k >= warm_up && k <= warm_up + EVIDENCE_SAMPLES
+    );
+    if !early_alarm && !energised_in_time {
         f.fail(
             Check::Relay,
             format_args!(
-                "not energised at the end of the warm-up (sample {warm_up}): first change {:?}",
+                "not energised within {EVIDENCE_SAMPLES} samples after the warm-up (sample {warm_up}): first change {:?}",
                 firmware.first()
             ),
         );
