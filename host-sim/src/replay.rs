@@ -88,6 +88,28 @@ pub struct ReplaySummary {
     pub probabilities: [f64; 4],
     /// Fraction of samples flagged as model mismatch.
     pub model_mismatch_fraction: f64,
+    /// Fraction of samples whose verdict was `inconclusive`.
+    pub inconclusive_fraction: f64,
+    /// Samples with a reading rejected as an outlier (spike, or a valve
+    /// command the motion contradicts).
+    pub outlier_samples: u64,
+    /// White-noise σ of the readings at the end, as estimated from the
+    /// data: position (m), piston and rod chamber pressure (bar).
+    pub noise: NoiseSummary,
+    /// Mean NIS of the leading hypothesis over the samples after the
+    /// warm-up (≈ 3 when the filters are consistent with the data).
+    pub mean_nis: Option<f64>,
+}
+
+/// Noise levels in the replay JSON.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct NoiseSummary {
+    /// Position reading, m.
+    pub x_piston_m: f64,
+    /// Piston chamber pressure, bar.
+    pub p_piston_bar: f64,
+    /// Rod chamber pressure, bar.
+    pub p_rod_bar: f64,
 }
 
 /// Why a replay stopped.
@@ -207,7 +229,8 @@ pub fn replay<T: Real, R: BufRead>(
         recording: name.to_string(),
         samples: 0,
         duration_s: 0.0,
-        verdict: Verdict::Healthy.name(),
+        // No sample is no evidence.
+        verdict: Verdict::Inconclusive.name(),
         first_alarm_s: None,
         leak_internal_lpm: None,
         leak_external_lpm: None,
@@ -217,7 +240,12 @@ pub fn replay<T: Real, R: BufRead>(
         leading: "healthy",
         probabilities: [0.25; 4],
         model_mismatch_fraction: 0.0,
+        inconclusive_fraction: 0.0,
+        outlier_samples: 0,
+        noise: NoiseSummary::default(),
+        mean_nis: None,
     };
+    let (mut inconclusive, mut nis_sum, mut nis_n) = (0u64, 0.0, 0u64);
     let t0 = first.as_ref().map(|s| s.t_s);
     let mut mismatch = 0u64;
     let head = first.into_iter().chain(second).map(Ok);
@@ -235,6 +263,22 @@ pub fn replay<T: Real, R: BufRead>(
         if status.health & monitor::status::health::MODEL_MISMATCH != 0 {
             mismatch += 1;
         }
+        if status.verdict == Verdict::Inconclusive {
+            inconclusive += 1;
+        }
+        if status.health & monitor::status::health::OUTLIER != 0 {
+            summary.outlier_samples += 1;
+        }
+        if status.leak_internal_lpm.is_some() {
+            nis_sum += status.evidence[status.leading as usize].mean_nis as f64;
+            nis_n += 1;
+        }
+        let [nx, n3, n4] = status.noise_sigma.map(|v| v as f64);
+        summary.noise = NoiseSummary {
+            x_piston_m: (nx * 1e7).round() / 1e7,
+            p_piston_bar: round4(n3),
+            p_rod_bar: round4(n4),
+        };
         if let (Some(i), Some(e)) = (status.leak_internal_lpm, status.leak_external_lpm) {
             summary.leak_internal_lpm = Some(round4(i as f64));
             summary.leak_external_lpm = Some(round4(e as f64));
@@ -249,6 +293,8 @@ pub fn replay<T: Real, R: BufRead>(
         }
     }
     summary.model_mismatch_fraction = mismatch as f64 / summary.samples.max(1) as f64;
+    summary.inconclusive_fraction = round4(inconclusive as f64 / summary.samples.max(1) as f64);
+    summary.mean_nis = (nis_n > 0).then(|| round4(nis_sum / nis_n as f64));
     Ok(summary)
 }
 

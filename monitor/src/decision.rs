@@ -50,6 +50,9 @@ use crate::status::{health, Event, Events, Evidence, Verdict};
 /// Mean NIS of the best filter above which the model is flagged as not
 /// fitting (χ²₃ has mean 3).
 const MISMATCH_NIS: f64 = 30.0;
+/// The alarm compares the leak flow less this many σ of its estimate
+/// with the alarm level.
+const ALARM_SIGMAS: f64 = 2.0;
 /// Lowest probability any hypothesis is given.
 const PROBABILITY_FLOOR: f64 = 1e-4;
 
@@ -65,6 +68,8 @@ pub struct Decision<T> {
     /// Leak flows (internal, external) of the `both` filter, l/min: fast
     /// and slow averages, and the slow average of their 1σ.
     fast: [T; 2],
+    /// Fast average of the flows less `ALARM_SIGMAS` σ: what the alarm sees.
+    fast_lower: [T; 2],
     slow: [T; 2],
     slow_sd: [T; 2],
     persist: [T; 2],
@@ -86,8 +91,11 @@ pub struct Decision<T> {
     baseline: [[T; 3]; 2],
     /// Evidence-weighted time since the filters (re)started, s (capped).
     evidence_s: T,
-    /// Recent average of the evidence weight (0 while not valid).
+    /// Recent average of the evidence weight (0 while not valid), as an
+    /// exponentially weighted sum and the same sum of ones, so that the
+    /// average is unbiased from the (re)start on.
     recent_weight: T,
+    recent_time: T,
     /// Time left until a filter reset no longer makes the verdict
     /// inconclusive, s.
     reset_hold_s: T,
@@ -109,6 +117,7 @@ impl<T: Real> Decision<T> {
             loglik: [T::ZERO; 4],
             nis: [T::c(3.0); 4],
             fast: [T::ZERO; 2],
+            fast_lower: [T::ZERO; 2],
             slow: [T::ZERO; 2],
             slow_sd: [T::ZERO; 2],
             persist: [T::ZERO; 2],
@@ -136,6 +145,7 @@ impl<T: Real> Decision<T> {
             ],
             evidence_s: T::ZERO,
             recent_weight: T::ZERO,
+            recent_time: T::ZERO,
             reset_hold_s: T::ZERO,
             min_evidence_s: T::c(f.min_evidence_s),
             evidence_memory_s: T::c(f.evidence_memory_s),
@@ -149,6 +159,7 @@ impl<T: Real> Decision<T> {
         self.loglik = [T::ZERO; 4];
         self.nis = [T::c(3.0); 4];
         self.fast = [T::ZERO; 2];
+        self.fast_lower = [T::ZERO; 2];
         self.slow = [T::ZERO; 2];
         self.slow_sd = [T::ZERO; 2];
         self.persist = [T::ZERO; 2];
@@ -159,12 +170,13 @@ impl<T: Real> Decision<T> {
         self.mismatch = false;
         self.evidence_s = T::ZERO;
         self.recent_weight = T::ZERO;
+        self.recent_time = T::ZERO;
     }
 
     /// Has the monitor evaluated enough valid evidence to claim healthy?
     pub fn conclusive(&self) -> bool {
         self.evidence_s >= self.min_evidence_s
-            && self.recent_weight >= self.min_evidence_fraction
+            && self.recent_weight >= self.min_evidence_fraction * self.recent_time
             && self.reset_hold_s <= T::ZERO
             && !self.mismatch
     }
@@ -202,6 +214,7 @@ impl<T: Real> Decision<T> {
         let counted = if valid { weight } else { T::ZERO };
         let a_recent = (dt / self.evidence_memory_s).min(T::ONE);
         self.recent_weight += a_recent * (counted - self.recent_weight);
+        self.recent_time += a_recent * (T::ONE - self.recent_time);
         // Capped: it only has to reach `min_evidence_s`.
         self.evidence_s = (self.evidence_s + dt * counted).min(T::c(1.0e4));
         // Evidence time: a sample counts in proportion to how quasi-steady
@@ -224,6 +237,11 @@ impl<T: Real> Decision<T> {
             let sds = [both.flow_internal_sd_lpm, both.flow_external_sd_lpm];
             for k in 0..2 {
                 self.fast[k] += a_fast * (flows[k] - self.fast[k]);
+                // The alarm looks at the lower confidence bound: a leak
+                // estimate the filter is still unsure of (after a start,
+                // across a transient) does not alarm however large.
+                let lower = flows[k] - T::c(ALARM_SIGMAS) * sds[k];
+                self.fast_lower[k] += a_fast * (lower - self.fast_lower[k]);
                 self.slow[k] += a_slow * (flows[k] - self.slow[k]);
                 self.slow_sd[k] += a_slow * (sds[k] - self.slow_sd[k]);
             }
@@ -237,7 +255,7 @@ impl<T: Real> Decision<T> {
         let mut new_leak = [false; 2];
         for k in 0..2 {
             let excess = if self.supports(k) {
-                ((self.fast[k] - self.alarm_lpm[k]) / self.alarm_lpm[k])
+                ((self.fast_lower[k] - self.alarm_lpm[k]) / self.alarm_lpm[k])
                     .clamp_to(-T::ONE, T::c(4.0))
             } else {
                 -T::ONE

@@ -181,6 +181,9 @@ impl<T: Real> Monitor<T> {
             _ => 0.0,
         };
         let checked = self.checker.check(sample, held_s, &mut events);
+        if checked.outlier {
+            flags |= health::OUTLIER;
+        }
         let Some(dt) = dt else {
             flags |= health::TIME_NOT_INCREASING;
             return self.status(sample.t_s, checked.faulted, flags, events);
@@ -210,9 +213,6 @@ impl<T: Real> Monitor<T> {
         self.update_temperature(c.temp_oil_c);
         self.checker.observe_pressures(c.p_piston_bar, c.p_rod_bar);
         let suspect = checked.suspect != 0;
-        if checked.outlier {
-            flags |= health::OUTLIER;
-        }
 
         let m = self.measurement(&c);
         // The command (and the port pressures) read at the previous sample
@@ -404,6 +404,7 @@ impl<T: Real> Monitor<T> {
             evidence: d.evidence(),
             faulted_channels: faulted,
             health: flags,
+            noise_sigma: self.checker.noise_sigma(),
             events,
         }
     }

@@ -313,7 +313,7 @@ params_struct! {
         pub noise_time_constant_s: f64 = 2.0,
         /// Evidence-weighted time the filters must have seen after the
         /// warm-up before the monitor claims `healthy`, s.
-        pub min_evidence_s: f64 = 1.0,
+        pub min_evidence_s: f64 = 0.5,
         /// Time constant of the recent evidence weight, s: when its average
         /// falls below `min_evidence_fraction` the verdict is
         /// `inconclusive` (too little quasi-steady operation for too long).

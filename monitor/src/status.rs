@@ -156,6 +156,10 @@ pub struct Status {
     pub faulted_channels: u8,
     /// Health flags (`health::*`).
     pub health: u16,
+    /// White-noise σ of the position (m), piston- and rod-chamber
+    /// pressure (bar) readings as estimated from the data
+    /// (`signal::noise`); the filters' measurement noise follows them.
+    pub noise_sigma: [f32; 3],
     /// Events at this sample.
     pub events: Events,
 }

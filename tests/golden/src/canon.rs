@@ -63,6 +63,7 @@ pub fn status(h: &mut Fnv64, s: &Status) {
         faulted_channels,
         health,
         events,
+        noise_sigma,
     } = s;
     h.f64(*t_s);
     h.u8(*verdict as u8);
@@ -95,6 +96,9 @@ pub fn status(h: &mut Fnv64, s: &Status) {
     h.u8(events.len() as u8);
     for e in events {
         h.u16(event_code(e));
+    }
+    for v in noise_sigma {
+        h.f32(*v);
     }
 }
 
@@ -211,6 +215,7 @@ mod tests {
             faulted_channels: 0,
             health: 0,
             events,
+            noise_sigma: [1e-5, 0.1, 0.2],
         }
     }
 
@@ -224,7 +229,8 @@ mod tests {
     fn every_status_field_changes_the_hash() {
         let b = hash(&base());
         let nudge = |v: f32| f32::from_bits(v.to_bits() ^ 1);
-        let mutations: [&dyn Fn(&mut Status); 19] = [
+        let mutations: [&dyn Fn(&mut Status); 20] = [
+            &|s| s.noise_sigma[2] = nudge(s.noise_sigma[2]),
             &|s| s.t_s = f64::from_bits(s.t_s.to_bits() ^ 1),
             &|s| s.verdict = Verdict::Both,
             &|s| s.leading = Hypothesis::External,

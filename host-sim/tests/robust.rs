@@ -1,0 +1,221 @@
+//! The monitor's robustness on the independent plant (`plant` crate, which
+//! shares no model code with the monitor): what it must say when it cannot
+//! tell, when a sensor lies, and at the end stops.
+//!
+//! The rigs here are drawn from seeds with the load set to the nominal
+//! crane (no payload), so that these tests are about the fault handling,
+//! not about how well an uncalibrated monitor fits a foreign load; the
+//! detection figures come from `host-sim eval`.
+
+use host_sim::eval::exec::row_sample;
+use monitor::status::health;
+use monitor::{Event, Monitor, Params, Status, Verdict};
+use plant::{Channel, Fault, Leak, RigSpec, Run, Scenario};
+
+/// A rig drawn from `seed` at 100 bar, 25 °C, with the nominal crane.
+fn rig(seed: u64) -> RigSpec {
+    let mut r = RigSpec::random(seed, 100.0, 25.0);
+    r.load.masses_kg = [6.12844, 15.36792, 13.62235, 87.92456];
+    r.load.inertias_kg_m2 = [0.070_673, 1.321_969, 0.879_096, 53.414_170];
+    r.load.payload_kg = 0.0;
+    r.load.force_offset_n = 0.0;
+    r
+}
+
+fn plant_run(rig: RigSpec, scenario: Scenario, faults: Vec<Fault>) -> Run {
+    Run {
+        rig,
+        scenario,
+        leak: Leak::default(),
+        faults,
+        temp_column: false,
+        sample_rate_hz: 1000.0,
+        noise_seed: 11,
+    }
+}
+
+/// Every status of the nominal f32 monitor over the run.
+fn statuses(run: &Run) -> Vec<Status> {
+    let mut m = Monitor::<f32>::new(&Params::nominal()).expect("nominal parameters");
+    plant::simulate(run)
+        .iter()
+        .map(|row| m.step(&row_sample(row)))
+        .collect()
+}
+
+fn alarms(st: &[Status]) -> Vec<(f64, Verdict)> {
+    st.iter()
+        .flat_map(|s| {
+            s.events.iter().filter_map(move |e| match e {
+                Event::AlarmRaised(v) => Some((s.t_s, *v)),
+                _ => None,
+            })
+        })
+        .collect()
+}
+
+fn closed_loop(seconds: f64) -> Scenario {
+    Scenario::ClosedLoop {
+        duration_s: seconds,
+        seed: 3,
+    }
+}
+
+#[test]
+fn a_ten_second_valve_step_test_ends_conclusive() {
+    for (seed, amplitude) in [(4, 0.3), (6, -0.4)] {
+        let run = plant_run(
+            rig(seed),
+            Scenario::StepTest {
+                duration_s: 10.0,
+                step_at_s: 3.0,
+                amplitude,
+            },
+            vec![],
+        );
+        let st = statuses(&run);
+        let last = st.last().unwrap();
+        assert!(alarms(&st).is_empty(), "rig {seed}: {:?}", alarms(&st));
+        assert_eq!(
+            last.verdict,
+            Verdict::Healthy,
+            "rig {seed}: health {:#x}, evidence {:?}, weight {}",
+            last.health,
+            last.evidence,
+            last.evidence_weight
+        );
+        // Not healthy before the evidence is there.
+        assert_eq!(st[500].verdict, Verdict::Inconclusive);
+    }
+}
+
+#[test]
+fn at_the_end_stops_the_filters_stay_consistent() {
+    let run = plant_run(
+        rig(4),
+        Scenario::StepTest {
+            duration_s: 10.0,
+            step_at_s: 3.0,
+            amplitude: 0.6,
+        },
+        vec![],
+    );
+    let rows = plant::simulate(&run);
+    let mut m = Monitor::<f32>::new(&Params::nominal()).unwrap();
+    let mut at_stop = Vec::new();
+    for row in &rows {
+        let s = m.step(&row_sample(row));
+        assert_eq!(s.health & health::FILTER_RESET, 0, "t {}", s.t_s);
+        if row.truth.at_end_stop && row.t > 6.0 {
+            at_stop.push(s.evidence[s.leading as usize].mean_nis);
+        }
+    }
+    assert!(at_stop.len() > 1000, "the piston reached its end stop");
+    let worst = at_stop.iter().copied().fold(0.0, f32::max);
+    // Without the end-stop constraint the healthy filter's NIS reached ~300.
+    assert!(worst < 30.0, "mean NIS at the end stop up to {worst}");
+}
+
+#[test]
+fn position_spikes_are_a_sensor_fault_never_a_leak() {
+    let run = plant_run(
+        rig(4),
+        closed_loop(40.0),
+        vec![Fault::Spikes {
+            channel: Channel::XPiston,
+            rate_hz: 1.5,
+            at_s: 20.0,
+        }],
+    );
+    let st = statuses(&run);
+    assert!(alarms(&st).is_empty(), "{:?}", alarms(&st));
+    assert_eq!(st.last().unwrap().verdict, Verdict::SensorFault);
+    let outliers = st
+        .iter()
+        .filter(|s| s.health & health::OUTLIER != 0)
+        .count();
+    assert!(outliers > 10, "{outliers} outlying samples");
+}
+
+#[test]
+fn an_open_valve_command_wire_is_a_sensor_fault_never_a_leak() {
+    let run = plant_run(
+        rig(4),
+        closed_loop(40.0),
+        vec![Fault::OpenWire {
+            channel: Channel::UValve,
+            at_s: 20.0,
+        }],
+    );
+    let st = statuses(&run);
+    assert!(alarms(&st).is_empty(), "{:?}", alarms(&st));
+    let first_fault = st
+        .iter()
+        .find(|s| s.t_s > 20.0 && s.verdict == Verdict::SensorFault)
+        .map(|s| s.t_s);
+    assert!(first_fault.is_some(), "the open wire was never flagged");
+}
+
+#[test]
+fn stuck_or_nan_time_is_inconclusive_never_healthy() {
+    for fault in [
+        Fault::StuckTime {
+            at_s: 20.0,
+            for_s: 2.0,
+        },
+        Fault::NanTime {
+            at_s: 20.0,
+            for_s: 2.0,
+        },
+    ] {
+        let run = plant_run(rig(4), closed_loop(30.0), vec![fault]);
+        let rows = plant::simulate(&run);
+        let mut m = Monitor::<f32>::new(&Params::nominal()).unwrap();
+        let mut during = 0;
+        for (k, row) in rows.iter().enumerate() {
+            let s = m.step(&row_sample(row));
+            let real_t = k as f64 / 1000.0;
+            if (20.05..21.95).contains(&real_t) {
+                during += 1;
+                assert_eq!(s.verdict, Verdict::Inconclusive, "{fault:?} at {real_t}");
+            }
+            assert!(!s.verdict.is_leak(), "{fault:?}: leak at {real_t}");
+        }
+        assert!(during > 1500);
+    }
+}
+
+#[test]
+fn random_noise_is_never_healthy_nor_a_leak() {
+    let run = plant_run(rig(4), closed_loop(20.0), vec![Fault::RandomNoise]);
+    let st = statuses(&run);
+    assert!(alarms(&st).is_empty(), "{:?}", alarms(&st));
+    let healthy = st.iter().filter(|s| s.verdict == Verdict::Healthy).count();
+    assert_eq!(healthy, 0);
+}
+
+#[test]
+fn noise_is_estimated_and_leak_flows_are_never_negative() {
+    let mut r = rig(4);
+    r.sensors.pressure[1].white_sigma = 0.4;
+    r.sensors.pressure[1].coloured_sigma = 0.0;
+    r.sensors.pressure[1].ripple_pickup = 0.0;
+    let run = plant_run(r, closed_loop(30.0), vec![]);
+    let st = statuses(&run);
+    for s in &st {
+        for v in [
+            s.leak_internal_lpm,
+            s.leak_external_lpm,
+            s.detect_internal_lpm,
+            s.detect_external_lpm,
+        ]
+        .into_iter()
+        .flatten()
+        {
+            assert!(v >= 0.0, "{v} at {}", s.t_s);
+        }
+    }
+    let sigma = st.last().unwrap().noise_sigma[1];
+    // The transmitter's lag and quantisation shape the noise a little.
+    assert!((0.25..0.5).contains(&sigma), "piston chamber σ {sigma} bar");
+}
