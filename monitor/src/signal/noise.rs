@@ -14,6 +14,8 @@
 //! valve steps, spikes and breakaway add almost nothing, while a real
 //! rise of the noise is followed within a few time constants.
 
+use crate::real::Real;
+
 /// E|d| / σ for white noise: √6 · √(2/π).
 const MEAN_ABS_PER_SIGMA: f32 = 1.954_410_7;
 /// A |d| beyond this many times the running mean counts as this much.
@@ -50,12 +52,13 @@ impl NoiseEstimate {
     /// Take the next reading (every valid sample, in order).
     pub fn update(&mut self, y: f32) {
         if self.held == 2 {
+            // `Real::min`/`max` compare and select; core's call fminf.
             let d = (y - 2.0 * self.prev[0] + self.prev[1]).abs();
-            let d = d.min(CLIP * self.mean_abs);
+            let d = Real::min(d, CLIP * self.mean_abs);
             self.mean_abs += self.alpha * (d - self.mean_abs);
             // Never collapse to zero (a quantised, noise-free recording
             // repeats values at every hold): the floor keeps a level.
-            self.mean_abs = self.mean_abs.max(self.floor * MEAN_ABS_PER_SIGMA);
+            self.mean_abs = Real::max(self.mean_abs, self.floor * MEAN_ABS_PER_SIGMA);
         } else {
             self.held += 1;
         }

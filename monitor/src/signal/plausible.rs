@@ -21,6 +21,8 @@
 //! The contradiction drains ten times slower than it fills, so an open
 //! wire stays a fault through the holds between moves.
 
+use crate::real::Real;
+
 /// Fastest plausible piston speed, m/s (the rig moves at ≤ 0.2 m/s).
 pub const MAX_SPEED_M_S: f32 = 0.5;
 /// A jump must also exceed this many σ of the reading's noise.
@@ -73,7 +75,7 @@ impl PositionSpikes {
     /// Check reading `x_m`, `dt_s` after the previous sample, with the
     /// reading's current noise σ `sigma_m`.
     pub fn check(&mut self, x_m: f32, dt_s: f32, sigma_m: f32) -> PositionCheck {
-        self.count -= self.count * (dt_s / OUTLIER_MEMORY_S).min(1.0);
+        self.count -= self.count * Real::min(dt_s / OUTLIER_MEMORY_S, 1.0);
         let mut outlier = false;
         let x = match self.last_good {
             None => {
@@ -165,7 +167,7 @@ impl CommandAgreement {
     /// Take the accepted position `x_m` and the command `u` of a sample
     /// `dt_s` after the previous one.
     pub fn check(&mut self, x_m: f32, u: f32, dt_s: f32) -> CommandCheck {
-        let a = (dt_s / SPEED_SMOOTHING_S).min(1.0);
+        let a = Real::min(dt_s / SPEED_SMOOTHING_S, 1.0);
         match self.x_smooth {
             None => self.x_smooth = Some(x_m),
             Some(xs) if dt_s > 0.0 => {
@@ -184,9 +186,9 @@ impl CommandAgreement {
             || (opening < -margin && v > CLOSED_SPEED_M_S);
         let contradicted = closed || against;
         if contradicted {
-            self.contradiction_s = (self.contradiction_s + dt_s).min(COMMAND_MEMORY_S);
+            self.contradiction_s = Real::min(self.contradiction_s + dt_s, COMMAND_MEMORY_S);
         } else {
-            self.contradiction_s = (self.contradiction_s - dt_s / COMMAND_DRAIN).max(0.0);
+            self.contradiction_s = Real::max(self.contradiction_s - dt_s / COMMAND_DRAIN, 0.0);
         }
         if self.contradiction_s >= COMMAND_FAULT_S {
             self.faulted = true;
