@@ -1,0 +1,125 @@
+//! Runs of the monitor over (part of) a recording: the statistics the air
+//! fit, the healthy baseline and the held-out validation need.
+
+use super::CalibrationError;
+use monitor::bank::NB;
+use monitor::status::health;
+use monitor::{Event, Monitor, Params, Sample, Verdict};
+
+/// The valve-command regions of `[baseline]`: retracting, holding,
+/// extending.
+pub const REGIONS: [&str; 3] = ["retracting", "holding", "extending"];
+
+/// What one monitor run saw over its counted samples (after warm-up, from
+/// `from_s` on).
+#[derive(Clone, Debug, Default)]
+pub struct Run {
+    /// Samples counted.
+    pub counted: usize,
+    /// Time counted, s.
+    pub counted_s: f64,
+    /// Mean of the healthy filter's windowed mean NIS.
+    pub healthy_nis: f64,
+    /// Mean of the leading hypothesis' windowed mean NIS.
+    pub leading_nis: f64,
+    /// Largest |reported leak| (evidence-window average), [internal,
+    /// external], l/min.
+    pub leak_max_lpm: [f64; 2],
+    /// Largest |detection reading| (0.25 s average), l/min.
+    pub detect_max_lpm: [f64; 2],
+    /// Fraction of the counted time with evidence weight > 0.5.
+    pub evidence_fraction: f64,
+    /// Leak alarms raised while counting (t, verdict).
+    pub alarms: Vec<(f64, Verdict)>,
+    /// Evidence-weighted sums of the `both` filter's leak coefficients
+    /// (l/min at 10 bar) per region: [Σw·θi, Σw·θe, Σw], w in seconds.
+    pub region_sums: [[f64; 3]; 3],
+}
+
+impl Run {
+    /// Evidence-weighted mean of the `both` filter's leak coefficients over
+    /// all regions, l/min at 10 bar.
+    pub fn both_mean(&self) -> [f64; 2] {
+        let s = self
+            .region_sums
+            .iter()
+            .fold([0.0; 3], |a, r| [a[0] + r[0], a[1] + r[1], a[2] + r[2]]);
+        if s[2] > 0.0 {
+            [s[0] / s[2], s[1] / s[2]]
+        } else {
+            [0.0; 2]
+        }
+    }
+}
+
+/// Region of a command: 0 retracting, 1 holding, 2 extending.
+fn region(u: f32, p: &Params) -> usize {
+    let d = u as f64 - p.valve.null_offset;
+    if d < -p.valve.dead_zone {
+        0
+    } else if d > p.valve.dead_zone {
+        2
+    } else {
+        1
+    }
+}
+
+/// Run `Monitor<f64>` with `p` over `samples`; count from `from_s` on.
+pub fn run(samples: &[Sample], p: &Params, from_s: f64) -> Result<Run, CalibrationError> {
+    let mut m: Monitor<f64> = Monitor::new(p).map_err(CalibrationError::Params)?;
+    let mut r = Run::default();
+    let (mut healthy, mut leading, mut evident_s) = (0.0, 0.0, 0.0);
+    let mut last_t: Option<f64> = None;
+    for s in samples {
+        let st = m.step(s);
+        let dt = last_t.map_or(0.0, |t| (s.t_s - t).clamp(0.0, 0.01));
+        last_t = Some(s.t_s);
+        if st.health & health::WARMING_UP != 0 || s.t_s < from_s {
+            continue;
+        }
+        for e in &st.events {
+            if let Event::AlarmRaised(v) = e {
+                r.alarms.push((s.t_s, *v));
+            }
+        }
+        r.counted += 1;
+        r.counted_s += dt;
+        healthy += st.evidence[0].mean_nis as f64;
+        leading += st.evidence[st.leading as usize].mean_nis as f64;
+        let w = st.evidence_weight as f64;
+        if w > 0.5 {
+            evident_s += dt;
+        }
+        for (k, (avg, det)) in [
+            (st.leak_internal_lpm, st.detect_internal_lpm),
+            (st.leak_external_lpm, st.detect_external_lpm),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            if let Some(a) = avg {
+                r.leak_max_lpm[k] = r.leak_max_lpm[k].max((a as f64).abs());
+            }
+            if let Some(d) = det {
+                r.detect_max_lpm[k] = r.detect_max_lpm[k].max((d as f64).abs());
+            }
+        }
+        if let (Some(b), Some(u)) = (m.bank(), s.u_valve) {
+            // The leak states are in l/min at 10 bar (LEAK_UNIT).
+            let x = &b.both.ekf.x;
+            let acc = &mut r.region_sums[region(u, p)];
+            acc[0] += w * dt * x[NB];
+            acc[1] += w * dt * x[NB + 1];
+            acc[2] += w * dt;
+        }
+    }
+    let n = r.counted.max(1) as f64;
+    r.healthy_nis = healthy / n;
+    r.leading_nis = leading / n;
+    r.evidence_fraction = if r.counted_s > 0.0 {
+        evident_s / r.counted_s
+    } else {
+        0.0
+    };
+    Ok(r)
+}
