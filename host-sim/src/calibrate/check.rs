@@ -29,6 +29,11 @@ pub struct Run {
     pub detect_max_lpm: [f64; 2],
     /// Fraction of the counted time with evidence weight > 0.5.
     pub evidence_fraction: f64,
+    /// Sensor-fault events and filter restarts (faults, gaps, numerical
+    /// resets) over the whole run.
+    pub faults: usize,
+    /// As above.
+    pub restarts: usize,
     /// Leak alarms raised while counting (t, verdict).
     pub alarms: Vec<(f64, Verdict)>,
     /// Evidence-weighted sums of the `both` filter's leak coefficients
@@ -74,6 +79,13 @@ pub fn run(samples: &[Sample], p: &Params, from_s: f64) -> Result<Run, Calibrati
         let st = m.step(s);
         let dt = last_t.map_or(0.0, |t| (s.t_s - t).clamp(0.0, 0.01));
         last_t = Some(s.t_s);
+        for e in &st.events {
+            match e {
+                Event::SensorFault(_) => r.faults += 1,
+                Event::DataGap | Event::FilterReset(_) => r.restarts += 1,
+                _ => {}
+            }
+        }
         if st.health & health::WARMING_UP != 0 || s.t_s < from_s {
             continue;
         }

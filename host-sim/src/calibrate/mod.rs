@@ -437,6 +437,19 @@ pub fn calibrate(samples: &[Sample], start: &Params) -> Result<Calibration, Cali
         cal.warnings
             .push("sensor noise not measurable (constant readings?); configured noise kept".into());
     }
+    // A reading near 0 bar (tank) must not leave the plausible range by
+    // noise alone: the lower limit is at least 7σ below zero (a false
+    // sensor fault less than once in 10¹¹ samples; a broken 4–20 mA loop
+    // still reads tens of bar below).
+    let sigma_max = cal.noise[..4].iter().map(|c| c.white).fold(0.0, f64::max);
+    let low = &mut p.sensors.pressure_range_bar[0];
+    if *low > -7.0 * sigma_max {
+        cal.warnings.push(format!(
+            "pressure noise up to {sigma_max:.2} bar: plausible pressure range widened from {low} to {:.1} bar so that noise on a tank reading is not a sensor fault",
+            -7.0 * sigma_max
+        ));
+        *low = -7.0 * sigma_max;
+    }
     cal.params = p.clone();
 
     // Motion: the whole recording, then the validation fit's part.
@@ -506,9 +519,11 @@ pub fn calibrate(samples: &[Sample], start: &Params) -> Result<Calibration, Cali
     }
     if v.counted_s < 0.5 * (duration - cal.fit_s) {
         failed.push(format!(
-            "the monitor estimated during only {:.1} s of the {:.1} s held out (sensor faults, gaps?)",
+            "the monitor estimated during only {:.1} s of the {:.1} s held out ({} sensor faults, {} filter restarts over the recording)",
             v.counted_s,
-            duration - cal.fit_s
+            duration - cal.fit_s,
+            v.faults,
+            v.restarts
         ));
     }
     if !failed.is_empty() {
