@@ -307,6 +307,7 @@ pub fn fit_valve(
         } else {
             "retract (P→B, A→T)"
         };
+        let short = if dir == 0 { "extend" } else { "retract" };
         if a_pts.len() < MIN_POINTS {
             q.problems.push(format!(
                 "valve {name}: only {} quasi-steady samples with enough pressure drop, need {MIN_POINTS}",
@@ -369,7 +370,7 @@ pub fn fit_valve(
         }
         let rms_lpm = rms * LPM_PER_M3S * (30.0 * BAR).sqrt();
         fits.push(Fit {
-            what: format!("valve flow gain, {name}"),
+            what: format!("valve flow gain, {short}"),
             value: format!(
                 "{kv_lpm:.4} l/min/√bar ({:+.1} % of previous)",
                 100.0 * (kv_lpm / nominal - 1.0)
@@ -389,7 +390,7 @@ pub fn fit_valve(
                     p.valve.rod_edge_gain_retract = k;
                 }
                 fits.push(Fit {
-                    what: format!("rod-side / piston-side edge, {name}"),
+                    what: format!("rod/piston-side edge ratio, {short}"),
                     value: format!("{k:.4}"),
                     quality: format!("{} samples", b_pts.len()),
                 });

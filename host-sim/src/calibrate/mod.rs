@@ -25,7 +25,9 @@
 //!    gravity scale (also taken as the moving-mass scale), Coulomb and
 //!    viscous friction.
 //! 3. **Oil**: the entrained-air fraction minimising the healthy filter's
-//!    normalised innovations (golden-section search), if determined.
+//!    normalised innovations (golden-section search), if determined. Only
+//!    on the validation fit's part (it costs ten monitor runs); the refit
+//!    keeps its result.
 //! 4. **Healthy leakage**: the monitor runs with the fitted parameters; the
 //!    evidence-weighted mean leak coefficients of its `both` filter become
 //!    the installation's healthy seal and rod-side leakage.
@@ -39,7 +41,7 @@
 //! recording; the monitor with those parameters then runs over the whole
 //! recording and is judged on the last third only (after warm-up): mean NIS
 //! of the leading hypothesis, largest healthy leak reading, evidence, alarms.
-//! If that passes, steps 1–5 run again on the whole recording and that
+//! If that passes, steps 1, 2, 4 and 5 run again on the whole recording and that
 //! refit is written: it has half as much data again and, with a typical
 //! 60 s work cycle, the only moves at a second speed in one direction (the
 //! two-thirds fit may have had to hold a valve edge for lack of them). The
@@ -271,9 +273,14 @@ fn fit_air(
     Ok(())
 }
 
-/// Fit steps 1–5 on `samples`, starting from `start`. Stops after the
-/// regressions if their quality is too poor (see `quality_problems`).
-fn fit_plant(samples: &[Sample], start: &Params) -> Result<PlantFit, CalibrationError> {
+/// Fit steps 1–5 on `samples`, starting from `start` (step 3 only if
+/// `search_air`). Stops after the regressions if their quality is too poor
+/// (see `quality_problems`).
+fn fit_plant(
+    samples: &[Sample],
+    start: &Params,
+    search_air: bool,
+) -> Result<PlantFit, CalibrationError> {
     let mut p = start.clone();
     p.baseline = Default::default();
     let mut fits = Vec::new();
@@ -296,7 +303,9 @@ fn fit_plant(samples: &[Sample], start: &Params) -> Result<PlantFit, Calibration
     if !quality.problems.is_empty() {
         return done(p, fits, warnings, quality, baseline_notes);
     }
-    fit_air(samples, &mut p, &mut fits, &mut warnings)?;
+    if search_air {
+        fit_air(samples, &mut p, &mut fits, &mut warnings)?;
+    }
     // 4. Healthy leakage: the model's own coefficients absorb the mean.
     let mean = check::run(samples, &p, f64::NEG_INFINITY)?.both_mean();
     // l/min at 10 bar → l/min/bar.
@@ -470,7 +479,7 @@ pub fn calibrate(samples: &[Sample], start: &Params) -> Result<Calibration, Cali
     }
 
     // 1–5 on the first two thirds, then validation on the last third.
-    let part = fit_plant(&samples[..split], &p)?;
+    let part = fit_plant(&samples[..split], &p, true)?;
     cal.quality[0] = part.quality.clone();
     if !part.quality.problems.is_empty() {
         let why = format!(
@@ -537,10 +546,23 @@ pub fn calibrate(samples: &[Sample], start: &Params) -> Result<Calibration, Cali
         });
     }
 
-    // The written fit: 1–5 again on the whole recording.
-    let full = fit_plant(samples, &p)?;
+    // The written fit: 1, 2, 4, 5 again on the whole recording; the air
+    // content (10 monitor runs to search, rarely determined) is the
+    // validated fit's.
+    let mut q = p.clone();
+    q.fluid.air_fraction = part.params.fluid.air_fraction;
+    let full = fit_plant(samples, &q, false)?;
     cal.quality[1] = full.quality.clone();
     cal.fits = full.fits;
+    // The air content is the validated fit's: its line and warning.
+    let air = |what: &str| what.starts_with("entrained air");
+    if let Some(f) = part.fits.iter().find(|f| air(&f.what)) {
+        let mut f = f.clone();
+        f.quality += &format!(" (on the first {:.0} s)", cal.fit_s);
+        cal.fits.push(f);
+    }
+    cal.warnings
+        .extend(part.warnings.iter().filter(|w| air(w)).cloned());
     cal.warnings.extend(full.warnings);
     cal.baseline_notes = full.baseline_notes;
     if !full.quality.problems.is_empty() {
@@ -612,7 +634,7 @@ impl Calibration {
             let _ = writeln!(s, "\nFitted:");
         }
         for f in &self.fits {
-            let _ = writeln!(s, "  {:<40} {:<58} {}", f.what, f.value, f.quality);
+            let _ = writeln!(s, "  {:<38} {:<52} {}", f.what, f.value, f.quality);
         }
         for n in &self.refit_notes {
             let _ = writeln!(s, "  whole-recording refit vs validated fit: {n}");
@@ -677,7 +699,7 @@ impl Calibration {
         if self.refused.is_none() {
             let _ = writeln!(
                 s,
-                "\nWhole recording, before → after: healthy-filter mean NIS {:.2} → {:.2}; largest detection reading internal {:.3} → {:.3} l/min, external {:.3} → {:.3} l/min",
+                "\nWhole recording, before → after calibration: healthy-filter mean NIS {:.2} → {:.2}; largest 0.25 s detection reading internal {:.3} → {:.3} l/min, external {:.3} → {:.3} l/min",
                 self.nis_before,
                 self.nis_after,
                 self.leak_before_lpm[0],

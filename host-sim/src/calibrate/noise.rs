@@ -156,7 +156,7 @@ pub fn estimate(samples: &[Sample]) -> Vec<ChannelNoise> {
                 if finite_run > 2 * h + 1 {
                     sum -= y[k - 2 * h - 1];
                 }
-                if finite_run >= 2 * h + 1 && slow[k - h] {
+                if finite_run > 2 * h && slow[k - h] {
                     res.push(y[k - h] - sum / width);
                 }
                 if finite_run >= 3 && slow[k] {
