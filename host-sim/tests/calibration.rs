@@ -250,9 +250,8 @@ fn only_holds_are_refused_naming_the_missing_moves() {
         "{msg}"
     );
     assert!(
-        msg.contains("0.0 s of quasi-steady extending moves")
-            && msg.contains("0.0 s of quasi-steady retracting moves")
-            && msg.contains("need 1.5 s"),
+        msg.contains("0.0 s of quasi-steady extending and 0.0 s of quasi-steady retracting")
+            && msg.contains("1.5 s more extending, 1.5 s more retracting"),
         "{msg}"
     );
     assert!(e.report().unwrap().contains("Verdict: refused"), "{msg}");
@@ -273,7 +272,7 @@ fn only_extend_moves_are_refused_naming_retraction() {
         "{msg}"
     );
     assert!(
-        msg.contains("retracting") && !msg.contains("extending"),
+        msg.contains("s more retracting") && !msg.contains("s more extending"),
         "{msg}"
     );
 }

@@ -3,6 +3,7 @@
 
 use super::CalibrationError;
 use monitor::bank::NB;
+use monitor::model::{BAR, P3, P4, P_REF};
 use monitor::status::health;
 use monitor::{Event, Monitor, Params, Sample, Verdict};
 
@@ -25,6 +26,12 @@ pub struct Run {
     /// Largest |reported leak| (evidence-window average), [internal,
     /// external], l/min.
     pub leak_max_lpm: [f64; 2],
+    /// Largest |reported leak| with the per-region `[baseline]` subtracted
+    /// from the `both` filter's coefficients, computed here as the
+    /// monitor's decision layer does (evidence-window average of
+    /// (θ − baseline)·|Δp|/10 bar): what a monitor that subtracts the
+    /// baseline reports; equal to `leak_max_lpm` for a zero baseline.
+    pub corrected_leak_max_lpm: [f64; 2],
     /// Largest |detection reading| (0.25 s average), l/min.
     pub detect_max_lpm: [f64; 2],
     /// Fraction of the counted time with evidence weight > 0.5.
@@ -69,13 +76,26 @@ fn region(u: f32, p: &Params) -> usize {
     }
 }
 
-/// Run `Monitor<f64>` with `p` over `samples`; count from `from_s` on.
-pub fn run(samples: &[Sample], p: &Params, from_s: f64) -> Result<Run, CalibrationError> {
+/// Run `Monitor<f64>` with `p` over the whole of `samples`.
+pub fn run(samples: &[Sample], p: &Params) -> Result<Run, CalibrationError> {
+    run_pieces(&[samples], p, (f64::NEG_INFINITY, f64::INFINITY))
+}
+
+/// Run `Monitor<f64>` with `p` over `pieces` of a recording one after the
+/// other (the time jump between them restarts the filters, as a data gap
+/// does); count the samples with `count.0 ≤ t < count.1`.
+pub fn run_pieces(
+    pieces: &[&[Sample]],
+    p: &Params,
+    count: (f64, f64),
+) -> Result<Run, CalibrationError> {
     let mut m: Monitor<f64> = Monitor::new(p).map_err(CalibrationError::Params)?;
     let mut r = Run::default();
     let (mut healthy, mut leading, mut evident_s) = (0.0, 0.0, 0.0);
     let mut last_t: Option<f64> = None;
-    for s in samples {
+    let mut corrected = [0.0f64; 2];
+    let b = &p.baseline;
+    for s in pieces.iter().flat_map(|piece| piece.iter()) {
         let st = m.step(s);
         let dt = last_t.map_or(0.0, |t| (s.t_s - t).clamp(0.0, 0.01));
         last_t = Some(s.t_s);
@@ -86,7 +106,7 @@ pub fn run(samples: &[Sample], p: &Params, from_s: f64) -> Result<Run, Calibrati
                 _ => {}
             }
         }
-        if st.health & health::WARMING_UP != 0 || s.t_s < from_s {
+        if st.health & health::WARMING_UP != 0 || !(s.t_s >= count.0 && s.t_s < count.1) {
             continue;
         }
         for e in &st.events {
@@ -116,9 +136,24 @@ pub fn run(samples: &[Sample], p: &Params, from_s: f64) -> Result<Run, Calibrati
                 r.detect_max_lpm[k] = r.detect_max_lpm[k].max((d as f64).abs());
             }
         }
-        if let (Some(b), Some(u)) = (m.bank(), s.u_valve) {
+        if let (Some(bank), Some(u), Some(pt)) = (m.bank(), s.u_valve, s.p_tank_bar) {
             // The leak states are in l/min at 10 bar (LEAK_UNIT).
-            let x = &b.both.ekf.x;
+            let x = &bank.both.ekf.x;
+            let reg = region(u, p);
+            let per_10bar = P_REF / 1.0e6;
+            let dp = [
+                (x[P3] - x[P4]).abs() * per_10bar,
+                (x[P4] - pt as f64 * BAR / P_REF).abs() * per_10bar,
+            ];
+            let theta = [
+                x[NB] - b.internal_lpm_per_10bar[reg],
+                x[NB + 1] - b.external_lpm_per_10bar[reg],
+            ];
+            let a = (dt / p.filter.evidence_window_s).min(1.0);
+            for k in 0..2 {
+                corrected[k] += a * (theta[k] * dp[k] - corrected[k]);
+                r.corrected_leak_max_lpm[k] = r.corrected_leak_max_lpm[k].max(corrected[k].abs());
+            }
             let acc = &mut r.region_sums[region(u, p)];
             acc[0] += w * dt * x[NB];
             acc[1] += w * dt * x[NB + 1];

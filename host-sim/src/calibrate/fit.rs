@@ -37,6 +37,8 @@ pub struct Prepared {
     v: Vec<f64>,
     /// Time each steady sample stands for, s.
     pub stride_s: f64,
+    /// Time at rest (smoothed speed below `MIN_SPEED`), s.
+    pub hold_s: f64,
 }
 
 fn moving_average(y: &[f64], h: usize) -> Vec<f64> {
@@ -52,6 +54,33 @@ fn moving_average(y: &[f64], h: usize) -> Vec<f64> {
             (prefix[hi] - prefix[lo]) / (hi - lo) as f64
         })
         .collect()
+}
+
+/// `prepare` each contiguous piece of a recording, as one data set.
+pub fn prepare_pieces(pieces: &[&[Sample]]) -> Prepared {
+    let mut all = prepare(&[]);
+    let (mut period_sum, mut n_sum) = (0.0, 0usize);
+    for piece in pieces {
+        let d = prepare(piece);
+        let offset = all.p2.len();
+        all.steady.extend(d.steady.iter().map(|i| i + offset));
+        for (to, from) in [
+            (&mut all.p2, d.p2),
+            (&mut all.p3, d.p3),
+            (&mut all.p4, d.p4),
+            (&mut all.p5, d.p5),
+            (&mut all.x, d.x),
+            (&mut all.u, d.u),
+            (&mut all.v, d.v),
+        ] {
+            to.extend(from);
+        }
+        all.hold_s += d.hold_s;
+        period_sum += d.stride_s * piece.len() as f64;
+        n_sum += piece.len();
+    }
+    all.stride_s = period_sum / n_sum.max(1) as f64;
+    all
 }
 
 /// Smooth the recording and find its quasi-steady moves.
@@ -104,7 +133,15 @@ pub fn prepare(samples: &[Sample]) -> Prepared {
     } else {
         0.0
     };
+    let hold_s = v
+        .get(h..n.saturating_sub(h))
+        .unwrap_or(&[])
+        .iter()
+        .filter(|v| v.abs() < MIN_SPEED)
+        .count() as f64
+        * period;
     Prepared {
+        hold_s,
         p2,
         p3,
         p4,
@@ -128,6 +165,8 @@ pub struct Motion {
     pub extend_spread: f64,
     /// As above, retracting (of −u).
     pub retract_spread: f64,
+    /// Time at rest, s.
+    pub hold_s: f64,
 }
 
 impl Motion {
@@ -158,6 +197,7 @@ impl Motion {
             retract_s: ret.len() as f64 * d.stride_s,
             extend_spread: sd(ext),
             retract_spread: sd(ret),
+            hold_s: d.hold_s,
         }
     }
 }
