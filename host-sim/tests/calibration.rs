@@ -69,7 +69,7 @@ fn monitor_view(samples: &[Sample], params: &Params) -> ([f64; 2], Vec<Verdict>)
 fn noise_estimates_are_within_20_percent_of_the_simulated_sigma() {
     for (seed, sigma) in [(4, 0.05), (5, 0.5)] {
         let (rig, sensors) = noisy_rig(seed, sigma);
-        let s = healthy_run(&rig, &sensors, 40 + seed);
+        let s = run(&rig, &sensors, 40 + seed, 40.0, Profile::Thesis);
         let e = noise::estimate(&s);
         for c in &e[..4] {
             assert!(
@@ -218,16 +218,16 @@ fn calibrated_monitor_detects_a_leak_on_the_other_rig() {
     let (rig, sensors) = perturbed_rig(&Params::nominal(), 9);
     let cal = calibrate(&healthy_run(&rig, &sensors, 91), &Params::nominal()).unwrap();
     let sc = Scenario {
-        duration_s: 60.0,
+        duration_s: 40.0,
         seed: 92,
         internal_lpm: 0.3,
-        leak_onset_s: 25.0,
+        leak_onset_s: 20.0,
         sensors,
         ..Scenario::default()
     };
     let run = common::run_with(sc, rig, &cal.params);
     let t = run.first_alarm.expect("leak detected").0;
-    assert!(t > 25.0 && t < 30.0, "alarm at {t}");
+    assert!(t > 20.0 && t < 25.0, "alarm at {t}");
     assert_eq!(run.final_status.verdict, Verdict::Internal);
 }
 
