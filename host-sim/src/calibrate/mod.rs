@@ -70,9 +70,9 @@ pub use noise::ChannelNoise;
 use monitor::model::{LEAK_UNIT, LPM_PER_M3S};
 use monitor::{Params, Sample};
 
-/// Minimum recording length, s: the held-out third must hold at least 10 s
-/// (2.5 evidence windows) for the validation to say anything.
-pub const MIN_DURATION_S: f64 = 30.0;
+/// Minimum recording length, s: the held-out third must hold at least 8 s
+/// (two evidence windows) for the validation to say anything.
+pub const MIN_DURATION_S: f64 = 24.0;
 /// Fraction of the recording the validation fit uses; the rest (a third)
 /// is held out.
 pub const FIT_FRACTION: f64 = 2.0 / 3.0;
