@@ -219,7 +219,10 @@ mod tests {
         );
         let e = estimate(&s);
         assert!((e[1].white / 0.2 - 1.0).abs() < 0.05, "{e:?}");
-        assert!(e[1].coloured < 0.05, "{e:?}");
+        // The steps (4 % of the samples within 10 of one) leak a little
+        // into the moving-average residual: < 6 % of the white σ in
+        // quadrature.
+        assert!(e[1].coloured < 0.35 * 0.2, "{e:?}");
     }
 
     #[test]
@@ -235,7 +238,8 @@ mod tests {
 
     #[test]
     fn quantisation_floor() {
-        let s = recording(|_, n| ((30.0 + n) / 0.1).round() * 0.1, 0.001);
+        // Noise well below the step: the reading toggles now and then.
+        let s = recording(|_, n| ((30.0 + n) / 0.1).round() * 0.1, 0.03);
         let e = estimate(&s);
         assert!((e[1].step - 0.1).abs() < 1e-4, "{e:?}");
         assert!((e[1].floored() - 0.1 / 12f64.sqrt()).abs() < 1e-4, "{e:?}");
