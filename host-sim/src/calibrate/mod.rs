@@ -111,7 +111,13 @@ pub const MAX_VALIDATION_NIS: f64 = 9.0;
 /// the validation cannot judge (the monitor barely evaluates evidence).
 /// Healthy: 44–93 % (the lower figures at 0.6 bar).
 pub const MIN_EVIDENCE_FRACTION: f64 = 0.1;
-/// Evidence a valve-command region needs for its baseline, s (weighted).
+/// Change of a valve flow gain from the validated fit to the written refit,
+/// %, above which the report warns (simulated rigs: ≤ 0.2 %).
+pub const MAX_REFIT_GAIN_CHANGE_PCT: f64 = 2.0;
+/// Evidence a valve-command region needs for its baseline, s (weighted):
+/// half an evidence window, so that the mean is not one transient's. A
+/// 60 s thesis cycle gives 4–6 s holding, 8–12 s retracting, 14–19 s
+/// extending; random work cycles 2.5–8 s per region.
 pub const MIN_REGION_EVIDENCE_S: f64 = 2.0;
 
 /// Why a recording cannot be used for calibration. The variants with a
@@ -527,7 +533,7 @@ pub fn calibrate(samples: &[Sample], start: &Params) -> Result<Calibration, Cali
         for (k, name) in [(2, "last"), (1, "middle"), (0, "first")] {
             let h = HeldOut::third(samples, k, name);
             let m = Motion::of(&fit::prepare_pieces(&h.fit_pieces(samples)));
-            match missing_motion(&m, MIN_STEADY_FIT_S, "no two thirds of the recording") {
+            match missing_motion(&m, MIN_STEADY_FIT_S, "the first two thirds of the recording (none of its other two-thirds parts does better for the validation fit)") {
                 None => {
                     held = Some(h);
                     break;
@@ -680,6 +686,22 @@ pub fn calibrate(samples: &[Sample], start: &Params) -> Result<Calibration, Cali
             full.params.friction.coulomb_n
         ),
     ));
+    let drift = [
+        rel(
+            a.flow_gain_extend_lpm_sqrt_bar,
+            b.flow_gain_extend_lpm_sqrt_bar,
+        ),
+        rel(
+            a.flow_gain_retract_lpm_sqrt_bar,
+            b.flow_gain_retract_lpm_sqrt_bar,
+        ),
+    ];
+    if drift.iter().any(|d| d.abs() > MAX_REFIT_GAIN_CHANGE_PCT) {
+        cal.warnings.push(format!(
+            "the refit's valve flow gains differ from the validated fit's by {:+.1} % / {:+.1} % (> {MAX_REFIT_GAIN_CHANGE_PCT} %): the valve changed during the recording, or one part lacks moves; check the held-out third's figures",
+            drift[0], drift[1]
+        ));
+    }
     let after = check::run(samples, &full.params)?;
     cal.nis_after = after.healthy_nis;
     cal.leak_after_lpm = after.detect_max_lpm;
