@@ -499,9 +499,20 @@ fn run(cli: Cli) -> Result<ExitCode> {
             if let Some(p) = period {
                 start.filter.sample_period_s = p;
             }
-            let cal = host_sim::calibrate::calibrate(&samples, &start)
-                .with_context(|| format!("{}", recording.display()))?;
-            print!("{}", cal.report());
+            let cal = match host_sim::calibrate::calibrate(&samples, &start) {
+                Ok(cal) => cal,
+                Err(e) => {
+                    // What was found up to the refusal, then the reason.
+                    if let Some(report) = e.report() {
+                        print!("{report}");
+                    }
+                    return Err(e).with_context(|| format!("{}", recording.display()));
+                }
+            };
+            print!("{}", cal.summary());
+            for w in cal.warnings() {
+                eprintln!("warning: {w}");
+            }
             let text = cal.to_toml(&recording.display().to_string())?;
             std::fs::write(&output, text)
                 .with_context(|| format!("{}: cannot write", output.display()))?;

@@ -1,0 +1,172 @@
+//! Runs of the monitor over (part of) a recording: the statistics the air
+//! fit, the healthy baseline and the held-out validation need.
+
+use super::CalibrationError;
+use monitor::bank::NB;
+use monitor::model::{BAR, P3, P4, P_REF};
+use monitor::status::health;
+use monitor::{Event, Monitor, Params, Sample, Verdict};
+
+/// The valve-command regions of `[baseline]`: retracting, holding,
+/// extending.
+pub const REGIONS: [&str; 3] = ["retracting", "holding", "extending"];
+
+/// What one monitor run saw over its counted samples (after warm-up, from
+/// `from_s` on).
+#[derive(Clone, Debug, Default)]
+pub struct Run {
+    /// Samples counted.
+    pub counted: usize,
+    /// Time counted, s.
+    pub counted_s: f64,
+    /// Mean of the healthy filter's windowed mean NIS.
+    pub healthy_nis: f64,
+    /// Mean of the leading hypothesis' windowed mean NIS.
+    pub leading_nis: f64,
+    /// Largest |reported leak| (evidence-window average), [internal,
+    /// external], l/min.
+    pub leak_max_lpm: [f64; 2],
+    /// Largest |reported leak| with the per-region `[baseline]` subtracted
+    /// from the `both` filter's coefficients, computed here as the
+    /// monitor's decision layer does (evidence-window average of
+    /// (θ − baseline)·|Δp|/10 bar): what a monitor that subtracts the
+    /// baseline reports; equal to `leak_max_lpm` for a zero baseline.
+    pub corrected_leak_max_lpm: [f64; 2],
+    /// Largest |detection reading| (0.25 s average), l/min.
+    pub detect_max_lpm: [f64; 2],
+    /// Fraction of the counted time with evidence weight > 0.5.
+    pub evidence_fraction: f64,
+    /// Sensor-fault events and filter restarts (faults, gaps, numerical
+    /// resets) over the whole run.
+    pub faults: usize,
+    /// As above.
+    pub restarts: usize,
+    /// Leak alarms raised while counting (t, verdict).
+    pub alarms: Vec<(f64, Verdict)>,
+    /// Evidence-weighted sums of the `both` filter's leak coefficients
+    /// (l/min at 10 bar) per region: [Σw·θi, Σw·θe, Σw], w in seconds.
+    pub region_sums: [[f64; 3]; 3],
+}
+
+impl Run {
+    /// Evidence-weighted mean of the `both` filter's leak coefficients over
+    /// all regions, l/min at 10 bar.
+    pub fn both_mean(&self) -> [f64; 2] {
+        let s = self
+            .region_sums
+            .iter()
+            .fold([0.0; 3], |a, r| [a[0] + r[0], a[1] + r[1], a[2] + r[2]]);
+        if s[2] > 0.0 {
+            [s[0] / s[2], s[1] / s[2]]
+        } else {
+            [0.0; 2]
+        }
+    }
+}
+
+/// Region of a command: 0 retracting, 1 holding, 2 extending.
+fn region(u: f32, p: &Params) -> usize {
+    let d = u as f64 - p.valve.null_offset;
+    if d < -p.valve.dead_zone {
+        0
+    } else if d > p.valve.dead_zone {
+        2
+    } else {
+        1
+    }
+}
+
+/// Run `Monitor<f64>` with `p` over the whole of `samples`.
+pub fn run(samples: &[Sample], p: &Params) -> Result<Run, CalibrationError> {
+    run_pieces(&[samples], p, (f64::NEG_INFINITY, f64::INFINITY))
+}
+
+/// Run `Monitor<f64>` with `p` over `pieces` of a recording one after the
+/// other (the time jump between them restarts the filters, as a data gap
+/// does); count the samples with `count.0 ≤ t < count.1`.
+pub fn run_pieces(
+    pieces: &[&[Sample]],
+    p: &Params,
+    count: (f64, f64),
+) -> Result<Run, CalibrationError> {
+    let mut m: Monitor<f64> = Monitor::new(p).map_err(CalibrationError::Params)?;
+    let mut r = Run::default();
+    let (mut healthy, mut leading, mut evident_s) = (0.0, 0.0, 0.0);
+    let mut last_t: Option<f64> = None;
+    let mut corrected = [0.0f64; 2];
+    let b = &p.baseline;
+    for s in pieces.iter().flat_map(|piece| piece.iter()) {
+        let st = m.step(s);
+        let dt = last_t.map_or(0.0, |t| (s.t_s - t).clamp(0.0, 0.01));
+        last_t = Some(s.t_s);
+        for e in &st.events {
+            match e {
+                Event::SensorFault(_) => r.faults += 1,
+                Event::DataGap | Event::FilterReset(_) => r.restarts += 1,
+                _ => {}
+            }
+        }
+        if st.health & health::WARMING_UP != 0 || !(s.t_s >= count.0 && s.t_s < count.1) {
+            continue;
+        }
+        for e in &st.events {
+            if let Event::AlarmRaised(v) = e {
+                r.alarms.push((s.t_s, *v));
+            }
+        }
+        r.counted += 1;
+        r.counted_s += dt;
+        healthy += st.evidence[0].mean_nis as f64;
+        leading += st.evidence[st.leading as usize].mean_nis as f64;
+        let w = st.evidence_weight as f64;
+        if w > 0.5 {
+            evident_s += dt;
+        }
+        for (k, (avg, det)) in [
+            (st.leak_internal_lpm, st.detect_internal_lpm),
+            (st.leak_external_lpm, st.detect_external_lpm),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            if let Some(a) = avg {
+                r.leak_max_lpm[k] = r.leak_max_lpm[k].max((a as f64).abs());
+            }
+            if let Some(d) = det {
+                r.detect_max_lpm[k] = r.detect_max_lpm[k].max((d as f64).abs());
+            }
+        }
+        if let (Some(bank), Some(u), Some(pt)) = (m.bank(), s.u_valve, s.p_tank_bar) {
+            // The leak states are in l/min at 10 bar (LEAK_UNIT).
+            let x = &bank.both.ekf.x;
+            let reg = region(u, p);
+            let per_10bar = P_REF / 1.0e6;
+            let dp = [
+                (x[P3] - x[P4]).abs() * per_10bar,
+                (x[P4] - pt as f64 * BAR / P_REF).abs() * per_10bar,
+            ];
+            let theta = [
+                x[NB] - b.internal_lpm_per_10bar[reg],
+                x[NB + 1] - b.external_lpm_per_10bar[reg],
+            ];
+            let a = (dt / p.filter.evidence_window_s).min(1.0);
+            for k in 0..2 {
+                corrected[k] += a * (theta[k] * dp[k] - corrected[k]);
+                r.corrected_leak_max_lpm[k] = r.corrected_leak_max_lpm[k].max(corrected[k].abs());
+            }
+            let acc = &mut r.region_sums[region(u, p)];
+            acc[0] += w * dt * x[NB];
+            acc[1] += w * dt * x[NB + 1];
+            acc[2] += w * dt;
+        }
+    }
+    let n = r.counted.max(1) as f64;
+    r.healthy_nis = healthy / n;
+    r.leading_nis = leading / n;
+    r.evidence_fraction = if r.counted_s > 0.0 {
+        evident_s / r.counted_s
+    } else {
+        0.0
+    };
+    Ok(r)
+}

@@ -1,0 +1,585 @@
+//! The regressions: valve from chamber continuity, load and friction from
+//! the force balance, each on quasi-steady moves.
+
+use super::Fit;
+use monitor::load::load_terms_exact;
+use monitor::model::{stribeck_decay, BAR, LPM_PER_M3S};
+use monitor::valve::orifice;
+use monitor::{Params, Sample};
+
+/// Samples each side of the centre for smoothing/differentiation.
+pub const HALF_WINDOW: usize = 15;
+/// Minimum piston speed of a steady sample, m/s.
+const MIN_SPEED: f64 = 0.003;
+/// Every this many samples is a candidate steady sample.
+const STRIDE: usize = 5;
+/// Fewest steady samples (one per `STRIDE`) for a regression.
+const MIN_POINTS: usize = 20;
+
+/// Spread (σ) of the valve command over one direction's steady samples
+/// below which flow gain and edge position cannot be told apart: with one
+/// speed only, a larger gain with a later edge fits as well as the truth.
+/// Then the edge is held at its previous value and only the gain fitted.
+/// The thesis profile's moves of 10 and 25 mm/s give ≈ 0.03; one ramp at
+/// one speed gives < 0.005 (from the load's variation along the stroke).
+pub const MIN_COMMAND_SPREAD: f64 = 0.01;
+
+/// Signals derived from a recording for the regressions.
+pub struct Prepared {
+    p2: Vec<f64>,
+    p3: Vec<f64>,
+    p4: Vec<f64>,
+    p5: Vec<f64>,
+    x: Vec<f64>,
+    u: Vec<f64>,
+    /// Indices of quasi-steady moving samples.
+    pub steady: Vec<usize>,
+    v: Vec<f64>,
+    /// Time each steady sample stands for, s.
+    pub stride_s: f64,
+    /// Time at rest (smoothed speed below `MIN_SPEED`), s.
+    pub hold_s: f64,
+}
+
+fn moving_average(y: &[f64], h: usize) -> Vec<f64> {
+    let n = y.len();
+    let mut prefix = vec![0.0; n + 1];
+    for i in 0..n {
+        prefix[i + 1] = prefix[i] + y[i];
+    }
+    (0..n)
+        .map(|i| {
+            let lo = i.saturating_sub(h);
+            let hi = (i + h + 1).min(n);
+            (prefix[hi] - prefix[lo]) / (hi - lo) as f64
+        })
+        .collect()
+}
+
+/// `prepare` each contiguous piece of a recording, as one data set.
+pub fn prepare_pieces(pieces: &[&[Sample]]) -> Prepared {
+    let mut all = prepare(&[]);
+    let (mut period_sum, mut n_sum) = (0.0, 0usize);
+    for piece in pieces {
+        let d = prepare(piece);
+        let offset = all.p2.len();
+        all.steady.extend(d.steady.iter().map(|i| i + offset));
+        for (to, from) in [
+            (&mut all.p2, d.p2),
+            (&mut all.p3, d.p3),
+            (&mut all.p4, d.p4),
+            (&mut all.p5, d.p5),
+            (&mut all.x, d.x),
+            (&mut all.u, d.u),
+            (&mut all.v, d.v),
+        ] {
+            to.extend(from);
+        }
+        all.hold_s += d.hold_s;
+        period_sum += d.stride_s * piece.len() as f64;
+        n_sum += piece.len();
+    }
+    all.stride_s = period_sum / n_sum.max(1) as f64;
+    all
+}
+
+/// Smooth the recording and find its quasi-steady moves.
+pub fn prepare(samples: &[Sample]) -> Prepared {
+    let get = |f: fn(&Sample) -> Option<f32>| -> Vec<f64> {
+        samples
+            .iter()
+            .map(|s| f(s).unwrap_or(f32::NAN) as f64)
+            .collect()
+    };
+    let t: Vec<f64> = samples.iter().map(|s| s.t_s).collect();
+    let h = HALF_WINDOW;
+    let p2 = moving_average(&get(|s| s.p_supply_bar), h);
+    let p3 = moving_average(&get(|s| s.p_piston_bar), h);
+    let p4 = moving_average(&get(|s| s.p_rod_bar), h);
+    let p5 = moving_average(&get(|s| s.p_tank_bar), h);
+    let x = moving_average(&get(|s| s.x_piston_m), h);
+    let u = moving_average(&get(|s| s.u_valve), h);
+    let n = samples.len();
+    let mut v = vec![0.0; n];
+    let mut a = vec![f64::NAN; n];
+    for i in h..n.saturating_sub(h) {
+        v[i] = (x[i + h] - x[i - h]) / (t[i + h] - t[i - h]);
+    }
+    for i in 2 * h..n.saturating_sub(2 * h) {
+        a[i] = (v[i + h] - v[i - h]) / (t[i + h] - t[i - h]);
+    }
+    let mut steady = Vec::new();
+    let span = 6 * h;
+    for i in (span..n.saturating_sub(span)).step_by(STRIDE) {
+        let all_valid = [p2[i], p3[i], p4[i], p5[i], x[i], u[i]]
+            .iter()
+            .all(|v| v.is_finite());
+        if !all_valid || v[i].abs() < MIN_SPEED || !(a[i].abs() < 0.02) {
+            continue;
+        }
+        // Steady command and pressures over ±90 ms.
+        let du = (u[i + span] - u[i - span]).abs();
+        let dp = (p3[i + span] - p3[i - span])
+            .abs()
+            .max((p4[i + span] - p4[i - span]).abs());
+        let same_direction =
+            v[i - span].signum() == v[i].signum() && v[i + span].signum() == v[i].signum();
+        if du < 0.01 && dp < 1.0 && same_direction {
+            steady.push(i);
+        }
+    }
+    let period = if n > 1 {
+        (t[n - 1] - t[0]) / (n - 1) as f64
+    } else {
+        0.0
+    };
+    let hold_s = v
+        .get(h..n.saturating_sub(h))
+        .unwrap_or(&[])
+        .iter()
+        .filter(|v| v.abs() < MIN_SPEED)
+        .count() as f64
+        * period;
+    Prepared {
+        hold_s,
+        p2,
+        p3,
+        p4,
+        p5,
+        x,
+        u,
+        steady,
+        v,
+        stride_s: STRIDE as f64 * period,
+    }
+}
+
+/// What motion a recording holds, for the engineer and the refusal.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Motion {
+    /// Quasi-steady extending moves, s.
+    pub extend_s: f64,
+    /// Quasi-steady retracting moves, s.
+    pub retract_s: f64,
+    /// Spread (σ) of the command over the steady extending samples.
+    pub extend_spread: f64,
+    /// As above, retracting (of −u).
+    pub retract_spread: f64,
+    /// Time at rest, s.
+    pub hold_s: f64,
+}
+
+impl Motion {
+    /// Measure the motion of prepared data.
+    pub fn of(d: &Prepared) -> Self {
+        let sd = |pts: Vec<f64>| {
+            let n = pts.len() as f64;
+            if pts.len() < 2 {
+                return 0.0;
+            }
+            let m = pts.iter().sum::<f64>() / n;
+            (pts.iter().map(|u| (u - m).powi(2)).sum::<f64>() / n).sqrt()
+        };
+        let ext: Vec<f64> = d
+            .steady
+            .iter()
+            .filter(|&&i| d.v[i] > 0.0)
+            .map(|&i| d.u[i])
+            .collect();
+        let ret: Vec<f64> = d
+            .steady
+            .iter()
+            .filter(|&&i| d.v[i] < 0.0)
+            .map(|&i| d.u[i])
+            .collect();
+        Self {
+            extend_s: ext.len() as f64 * d.stride_s,
+            retract_s: ret.len() as f64 * d.stride_s,
+            extend_spread: sd(ext),
+            retract_spread: sd(ret),
+            hold_s: d.hold_s,
+        }
+    }
+}
+
+/// Least squares y = a + b·x; returns (a, b, r², rms).
+pub fn line_fit(pts: &[(f64, f64)]) -> Option<(f64, f64, f64, f64)> {
+    let n = pts.len() as f64;
+    if pts.len() < MIN_POINTS {
+        return None;
+    }
+    let (sx, sy) = pts.iter().fold((0.0, 0.0), |s, p| (s.0 + p.0, s.1 + p.1));
+    let (mx, my) = (sx / n, sy / n);
+    let (mut sxx, mut sxy, mut syy) = (0.0, 0.0, 0.0);
+    for (x, y) in pts {
+        sxx += (x - mx) * (x - mx);
+        sxy += (x - mx) * (y - my);
+        syy += (y - my) * (y - my);
+    }
+    if !(sxx > 0.0) {
+        return None;
+    }
+    let b = sxy / sxx;
+    let a = my - b * mx;
+    let rss: f64 = pts.iter().map(|(x, y)| (y - a - b * x).powi(2)).sum();
+    let r2 = if syy > 0.0 { 1.0 - rss / syy } else { 0.0 };
+    Some((a, b, r2, (rss / n).sqrt()))
+}
+
+/// Least squares through the origin y = k·x; returns (k, rms).
+pub fn ratio_fit(pts: &[(f64, f64)]) -> Option<(f64, f64)> {
+    let (sxy, sxx) = pts
+        .iter()
+        .fold((0.0, 0.0), |s, (x, y)| (s.0 + x * y, s.1 + x * x));
+    (pts.len() >= MIN_POINTS && sxx > 0.0).then(|| {
+        let k = sxy / sxx;
+        let rss: f64 = pts.iter().map(|(x, y)| (y - k * x).powi(2)).sum();
+        (k, (rss / pts.len() as f64).sqrt())
+    })
+}
+
+/// Solve the small normal equations A·θ = b by Gaussian elimination with
+/// partial pivoting.
+pub fn solve<const N: usize>(mut a: [[f64; N]; N], mut b: [f64; N]) -> Option<[f64; N]> {
+    for c in 0..N {
+        let p = (c..N).max_by(|&i, &j| a[i][c].abs().total_cmp(&a[j][c].abs()))?;
+        if !(a[p][c].abs() > 1e-12) {
+            return None;
+        }
+        a.swap(c, p);
+        b.swap(c, p);
+        for r in c + 1..N {
+            let f = a[r][c] / a[c][c];
+            for k in c..N {
+                a[r][k] -= f * a[c][k];
+            }
+            b[r] -= f * b[c];
+        }
+    }
+    let mut x = [0.0; N];
+    for r in (0..N).rev() {
+        let s: f64 = (r + 1..N).map(|k| a[r][k] * x[k]).sum();
+        x[r] = (b[r] - s) / a[r][r];
+    }
+    Some(x)
+}
+
+/// Flow gain per edge, l/min/√bar, from m³/(s·√Pa).
+fn kv_to_lpm(kv: f64) -> f64 {
+    kv * LPM_PER_M3S * BAR.sqrt()
+}
+
+/// Quality figures of the regressions, for the refusal thresholds.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Quality {
+    /// Valve regression per direction [extend, retract]: R² (None when the
+    /// edge was held, the command spread being too small for it).
+    pub valve_r2: [Option<f64>; 2],
+    /// Valve regression residual relative to the mean metering flow.
+    pub valve_rel_residual: [Option<f64>; 2],
+    /// Force-balance residual, N (rms).
+    pub force_residual_n: Option<f64>,
+    /// Its part explained by the pressure noise, N.
+    pub force_noise_n: f64,
+    /// Why the fit cannot be used (empty: usable).
+    pub problems: Vec<String>,
+}
+
+impl Quality {
+    /// Force residual beyond what the pressure noise explains, N.
+    pub fn force_excess_n(&self) -> Option<f64> {
+        self.force_residual_n.map(|r| {
+            (r * r - self.force_noise_n * self.force_noise_n)
+                .max(0.0)
+                .sqrt()
+        })
+    }
+}
+
+/// Fit the valve's flow gains, edge ratios, dead zone and null.
+pub fn fit_valve(
+    d: &Prepared,
+    p: &mut Params,
+    fits: &mut Vec<Fit>,
+    warnings: &mut Vec<String>,
+    q: &mut Quality,
+) {
+    let c = &p.cylinder;
+    let k_edge = p.valve.edge_leak_lpm_per_bar / LPM_PER_M3S / BAR;
+    let k_seal = p.leakage.seal_lpm_per_bar / LPM_PER_M3S / BAR;
+    let k_ext = p.leakage.external_lpm_per_bar / LPM_PER_M3S / BAR;
+    let delta = p.valve.laminar_dp_bar * BAR;
+    let g = |dp: f64| orifice(dp, delta, delta.sqrt()).0;
+    let (mut ext_a, mut ext_b, mut ret_a, mut ret_b) =
+        (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    for &i in &d.steady {
+        let (p2, p3, p4, p5) = (d.p2[i] * BAR, d.p3[i] * BAR, d.p4[i] * BAR, d.p5[i] * BAR);
+        let v = d.v[i];
+        let seal = k_seal * (p3 - p4);
+        // Metering flow into A and into B from steady continuity.
+        let q_a = c.piston_area_m2 * v + seal - k_edge * (p2 + p5 - 2.0 * p3);
+        let q_b =
+            -c.rod_side_area_m2 * v - seal - k_edge * (p2 + p5 - 2.0 * p4) + k_ext * (p4 - p5);
+        let u = d.u[i];
+        if v > 0.0 && p2 - p3 > 2.0 * BAR && p4 - p5 > 2.0 * BAR {
+            ext_a.push((u, q_a / g(p2 - p3)));
+            ext_b.push((u, -q_b / g(p4 - p5)));
+        } else if v < 0.0 && p3 - p5 > 2.0 * BAR && p2 - p4 > 2.0 * BAR {
+            ret_a.push((-u, -q_a / g(p3 - p5)));
+            ret_b.push((-u, q_b / g(p2 - p4)));
+        }
+    }
+    // Each direction: y = Kv·(±u − edge): slope Kv, edge = −a/b. The
+    // edges of the starting parameters, in ±u: extend opens at dz − null,
+    // retract (in −u) at dz + null.
+    let start_edges = [
+        p.valve.dead_zone - p.valve.null_offset,
+        p.valve.dead_zone + p.valve.null_offset,
+    ];
+    let spreads = {
+        let m = Motion::of(d);
+        [m.extend_spread, m.retract_spread]
+    };
+    let mut edges = [None, None];
+    for (dir, a_pts, b_pts) in [(0, &ext_a, &ext_b), (1, &ret_a, &ret_b)] {
+        let name = if dir == 0 {
+            "extend (P→A, B→T)"
+        } else {
+            "retract (P→B, A→T)"
+        };
+        let short = if dir == 0 { "extend" } else { "retract" };
+        if a_pts.len() < MIN_POINTS {
+            q.problems.push(format!(
+                "valve {name}: only {} quasi-steady samples with enough pressure drop, need {MIN_POINTS}",
+                a_pts.len()
+            ));
+            continue;
+        }
+        let nominal = if dir == 0 {
+            p.valve.flow_gain_extend_lpm_sqrt_bar
+        } else {
+            p.valve.flow_gain_retract_lpm_sqrt_bar
+        };
+        let mean_y = a_pts.iter().map(|p| p.1.abs()).sum::<f64>() / a_pts.len() as f64;
+        let (b, edge, r2, rms) = if spreads[dir] >= MIN_COMMAND_SPREAD {
+            let Some((a, b, r2, rms)) = line_fit(a_pts) else {
+                q.problems
+                    .push(format!("valve {name}: degenerate regression"));
+                continue;
+            };
+            (b, -a / b, Some(r2), rms)
+        } else {
+            // One speed only: the gain with the edge where it was.
+            let e0 = start_edges[dir];
+            let shifted: Vec<(f64, f64)> = a_pts.iter().map(|(u, y)| (u - e0, *y)).collect();
+            let Some((b, rms)) = ratio_fit(&shifted) else {
+                q.problems
+                    .push(format!("valve {name}: degenerate regression"));
+                continue;
+            };
+            warnings.push(format!(
+                "valve {name}: the moves span too few speeds (command σ {:.4} < {MIN_COMMAND_SPREAD}) to place the edge; edge held at {e0:+.4}, only the gain fitted",
+                spreads[dir]
+            ));
+            (b, e0, None, rms)
+        };
+        let rel = rms / mean_y;
+        q.valve_r2[dir] = r2;
+        q.valve_rel_residual[dir] = Some(rel);
+        let kv_lpm = kv_to_lpm(b);
+        if !(kv_lpm > 0.5 * nominal && kv_lpm < 2.0 * nominal && edge > -0.05 && edge < 0.1) {
+            q.problems.push(format!(
+                "valve {name}: implausible fit (gain {kv_lpm:.3} l/min/√bar against {nominal:.3} before, edge at u = {edge:+.4})"
+            ));
+            continue;
+        }
+        let ratio = ratio_fit(
+            &b_pts
+                .iter()
+                .map(|(u, y)| (u - edge, *y))
+                .collect::<Vec<_>>(),
+        )
+        .map(|(k, _)| k / b);
+        if dir == 0 {
+            p.valve.flow_gain_extend_lpm_sqrt_bar = kv_lpm;
+        } else {
+            p.valve.flow_gain_retract_lpm_sqrt_bar = kv_lpm;
+        }
+        if r2.is_some() {
+            edges[dir] = Some(edge);
+        }
+        let rms_lpm = rms * LPM_PER_M3S * (30.0 * BAR).sqrt();
+        fits.push(Fit {
+            what: format!("valve flow gain, {short}"),
+            value: format!(
+                "{kv_lpm:.4} l/min/√bar ({:+.1} % of previous)",
+                100.0 * (kv_lpm / nominal - 1.0)
+            ),
+            quality: format!(
+                "{} samples, {}residual {:.1} % of the flow (≈ {rms_lpm:.3} l/min at 30 bar)",
+                a_pts.len(),
+                r2.map_or("edge held, ".to_string(), |r2| format!("R² {r2:.4}, ")),
+                100.0 * rel
+            ),
+        });
+        match ratio {
+            Some(k) if k > 0.8 && k < 1.25 => {
+                if dir == 0 {
+                    p.valve.rod_edge_gain_extend = k;
+                } else {
+                    p.valve.rod_edge_gain_retract = k;
+                }
+                fits.push(Fit {
+                    what: format!("rod/piston-side edge ratio, {short}"),
+                    value: format!("{k:.4}"),
+                    quality: format!("{} samples", b_pts.len()),
+                });
+            }
+            other => q.problems.push(format!(
+                "valve {name}: rod-side/piston-side edge ratio {} implausible (0.8–1.25 expected)",
+                other.map_or("undetermined".into(), |k| format!("{k:.3}"))
+            )),
+        }
+    }
+    match edges {
+        [Some(e_ext), Some(e_ret)] => {
+            // Edges open at u = dz − null (extend) and u = −(dz + null).
+            let dz = 0.5 * (e_ext + e_ret);
+            let null = 0.5 * (e_ret - e_ext);
+            if (0.0..0.08).contains(&dz) && null.abs() < 0.03 {
+                p.valve.dead_zone = dz;
+                p.valve.null_offset = null;
+                fits.push(Fit {
+                    what: "valve dead zone and null".into(),
+                    value: format!("dead zone {dz:.4}, null {null:+.4} (fraction of travel)"),
+                    quality: format!("edges at u = {e_ext:+.4} / {:+.4}", -e_ret),
+                });
+            } else {
+                q.problems.push(format!(
+                    "valve dead zone {dz:.4} / null {null:+.4} implausible (0–0.08 / ±0.03 expected)"
+                ));
+            }
+        }
+        _ => warnings.push(
+            "valve dead zone and null need moves at several speeds in both directions; kept".into(),
+        ),
+    }
+}
+
+/// Fit the load (gravity and moving-mass scale) and friction.
+pub fn fit_load(d: &Prepared, p: &mut Params, fits: &mut Vec<Fit>, q: &mut Quality) {
+    let c = &p.cylinder;
+    let fr = &p.friction;
+    let ratio = if fr.coulomb_n > 0.0 {
+        fr.breakaway_n / fr.coulomb_n
+    } else {
+        1.0
+    };
+    let mut geo = p.load.clone();
+    geo.gravity_scale = 1.0;
+    geo.inertia_scale = 1.0;
+    geo.force_offset_n = 0.0;
+    // Normal equations for y = s·G0(x) + Fc·φ(v) + B·v.
+    let mut ata = [[0.0; 3]; 3];
+    let mut atb = [0.0; 3];
+    let mut rows = Vec::new();
+    let (mut up, mut down) = (0usize, 0usize);
+    for &i in &d.steady {
+        let v = d.v[i];
+        let load = load_terms_exact(&geo, d.x[i].clamp(0.0, c.stroke_m));
+        let y = d.p3[i] * BAR * c.piston_area_m2
+            - d.p4[i] * BAR * c.rod_side_area_m2
+            - load.c2_kg_m * p.load.inertia_scale * v * v;
+        let decay = stribeck_decay(fr.stribeck_s_per_m * v.abs());
+        let phi = v.signum() * ((1.0 - decay) + ratio * decay);
+        let row = [load.gravity_n, phi, v];
+        for r in 0..3 {
+            for k in 0..3 {
+                ata[r][k] += row[r] * row[k];
+            }
+            atb[r] += row[r] * y;
+        }
+        rows.push((row, y));
+        if v > 0.0 {
+            up += 1;
+        } else {
+            down += 1;
+        }
+    }
+    // The pressure noise left in the 2h+1-sample averages, as force.
+    q.force_noise_n =
+        p.sensors.pressure_noise_bar * BAR * c.piston_area_m2.hypot(c.rod_side_area_m2)
+            / ((2 * HALF_WINDOW + 1) as f64).sqrt();
+    if up < MIN_POINTS || down < MIN_POINTS {
+        q.problems.push(format!(
+            "load and friction need steady moves up and down ({up} up, {down} down, need {MIN_POINTS} each)"
+        ));
+        return;
+    }
+    let Some([s, fc, b]) = solve(ata, atb) else {
+        q.problems
+            .push("load and friction: ill-conditioned regression".into());
+        return;
+    };
+    let rms = (rows
+        .iter()
+        .map(|(r, y)| (y - s * r[0] - fc * r[1] - b * r[2]).powi(2))
+        .sum::<f64>()
+        / rows.len() as f64)
+        .sqrt();
+    q.force_residual_n = Some(rms);
+    if !(s > 0.7 && s < 1.3 && (0.0..5000.0).contains(&fc) && (0.0..100_000.0).contains(&b)) {
+        q.problems.push(format!(
+            "load and friction implausible (gravity ×{s:.3}, Coulomb {fc:.0} N, viscous {b:.0} N·s/m)"
+        ));
+        return;
+    }
+    p.load.gravity_scale = s;
+    // The unaccounted mass moves with the crane: scale inertia alike.
+    p.load.inertia_scale = s;
+    p.friction.coulomb_n = fc;
+    p.friction.breakaway_n = fc * ratio;
+    p.friction.viscous_ns_per_m = b;
+    fits.push(Fit {
+        what: "load (gravity and moving mass scale)".into(),
+        value: format!("× {s:.4}"),
+        quality: format!(
+            "{} samples ({up} up, {down} down), force residual {rms:.0} N ({:.0} N of it pressure noise)",
+            rows.len(),
+            q.force_noise_n
+        ),
+    });
+    fits.push(Fit {
+        what: "friction".into(),
+        value: format!(
+            "Coulomb {fc:.0} N, breakaway {:.0} N, viscous {b:.0} N·s/m",
+            fc * ratio
+        ),
+        quality: "same regression".into(),
+    });
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn line_fit_recovers_a_line() {
+        let pts: Vec<(f64, f64)> = (0..50).map(|i| (i as f64, 2.0 + 0.5 * i as f64)).collect();
+        let (a, b, r2, rms) = line_fit(&pts).unwrap();
+        assert!((a - 2.0).abs() < 1e-9 && (b - 0.5).abs() < 1e-12 && r2 > 0.999_999 && rms < 1e-9);
+    }
+
+    #[test]
+    fn solve_small_systems() {
+        let x = solve(
+            [[2.0, 1.0, 0.0], [1.0, 3.0, 1.0], [0.0, 1.0, 4.0]],
+            [3.0, 5.0, 5.0],
+        )
+        .unwrap();
+        for (got, want) in x.iter().zip([1.0, 1.0, 1.0]) {
+            assert!((got - want).abs() < 1e-12);
+        }
+        assert!(solve([[1.0, 2.0], [2.0, 4.0]], [1.0, 2.0]).is_none());
+    }
+}
