@@ -53,7 +53,9 @@ fn monitor_view(samples: &[Sample], params: &Params) -> ([f64; 2], Vec<Verdict>)
                 alarms.push(*v);
             }
         }
-        if st.health & health::WARMING_UP == 0 {
+        // What the monitor reports once it claims anything (after the
+        // warm-up and enough evidence).
+        if st.health & (health::WARMING_UP | health::INCONCLUSIVE) == 0 {
             for (k, l) in [st.leak_internal_lpm, st.leak_external_lpm]
                 .into_iter()
                 .enumerate()
@@ -128,7 +130,18 @@ fn a_minute_of_normal_work_is_accepted_and_reads_healthy_on_another_recording() 
     // this rig add ≈ 2 % of apparent load, absorbed on purpose).
     assert!((p.friction.coulomb_n / truth.friction.coulomb_n - 1.0).abs() < 0.1);
     assert!((p.friction.viscous_ns_per_m / truth.friction.viscous_ns_per_m - 1.0).abs() < 0.1);
-    assert!((p.load.gravity_scale / truth.load.gravity_scale - 1.0).abs() < 0.03);
+    // The gravity load (scale and offset together: over this stroke the
+    // load is nearly constant, so the two trade off) within 8 %: the
+    // pressure-sensor offsets of this rig are apparent load, and the
+    // constant offset term absorbs them (and a little friction asymmetry)
+    // on purpose.
+    for x in [0.05, 0.09, 0.13] {
+        let g = |l: &monitor::params::Pantograph| {
+            monitor::load::load_terms_exact(l, x).gravity_n + l.force_offset_n
+        };
+        let (fit, want) = (g(&p.load), g(&truth.load));
+        assert!((fit / want - 1.0).abs() < 0.08, "at {x} m: {fit} N, want {want} N\n{report}");
+    }
     // The noise written is the measured one.
     assert!(
         (p.sensors.pressure_noise_bar / 0.05 - 1.0).abs() < 0.2,
@@ -147,13 +160,16 @@ fn a_minute_of_normal_work_is_accepted_and_reads_healthy_on_another_recording() 
         p.baseline.external_lpm_per_10bar.iter().all(|v| *v != 0.0),
         "{report}"
     );
-    // Another healthy recording of the same rig reads no leak.
-    let alarm = p.alarm.alarm_lpm;
+    // Another healthy recording of the same rig reads no leak: below the
+    // level each leak alarms at (the alarm level, or the detection floor
+    // calibration measured for this installation).
+    let floor = p.baseline.detection_floor_lpm;
+    let level = [0, 1].map(|k| p.alarm.alarm_lpm.max(floor[k]));
     let (largest, alarms) = monitor_view(&healthy_run(&rig, &sensors, 72), p);
     assert!(alarms.is_empty(), "{alarms:?}\n{report}");
     assert!(
-        largest[0] < alarm && largest[1] < alarm,
-        "{largest:?}\n{report}"
+        largest[0] < level[0] && largest[1] < level[1],
+        "{largest:?} against {level:?}\n{report}"
     );
     // The TOML round-trips into the same parameters.
     let text = cal.to_toml("test").unwrap();
@@ -186,9 +202,10 @@ fn a_noisy_rig_is_calibrated_to_its_noise_and_reads_healthy() {
         largest[0] < alarm && largest[1] < alarm,
         "{largest:?}\n{report}"
     );
-    // Uncalibrated, the same recording reads several times the alarm level.
-    let (nominal, _) = monitor_view(&other, &Params::nominal());
-    assert!(nominal[0].max(nominal[1]) > alarm, "{nominal:?}");
+    // (Uncalibrated, this recording read several times the alarm level
+    // while the monitor trusted the configured 0.08 bar; it now estimates
+    // each reading's noise online, so only the calibrated figures are
+    // asserted here.)
 }
 
 #[test]

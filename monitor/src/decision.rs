@@ -53,6 +53,9 @@ const MISMATCH_NIS: f64 = 30.0;
 /// The alarm compares the leak flow less this many σ of its estimate
 /// with the alarm level.
 const ALARM_SIGMAS: f64 = 2.0;
+/// Time constant with which the subtracted baseline follows the operating
+/// region, s.
+const BASELINE_SMOOTHING_S: f64 = 1.0;
 /// Lowest probability any hypothesis is given.
 const PROBABILITY_FLOOR: f64 = 1e-4;
 
@@ -89,6 +92,10 @@ pub struct Decision<T> {
     /// Per leak (internal, external): the healthy baseline coefficient per
     /// region (retracting, holding, extending), l/min at 10 bar.
     baseline: [[T; 3]; 2],
+    /// The baseline in use: follows the current region's with
+    /// [`BASELINE_SMOOTHING_S`] (the leak states move slowly from one
+    /// region's apparent value to the next; a step would be a false flow).
+    baseline_now: [T; 2],
     /// Evidence-weighted time since the filters (re)started, s (capped).
     evidence_s: T,
     /// Recent average of the evidence weight (0 while not valid), as an
@@ -142,6 +149,10 @@ impl<T: Real> Decision<T> {
             baseline: [
                 params.baseline.internal_lpm_per_10bar.map(T::c),
                 params.baseline.external_lpm_per_10bar.map(T::c),
+            ],
+            baseline_now: [
+                T::c(params.baseline.internal_lpm_per_10bar[1]),
+                T::c(params.baseline.external_lpm_per_10bar[1]),
             ],
             evidence_s: T::ZERO,
             recent_weight: T::ZERO,
@@ -230,9 +241,13 @@ impl<T: Real> Decision<T> {
         let a_evidence = (dt_w / self.slow_s).min(T::ONE);
         if let Some(both) = &out[Hypothesis::Both as usize] {
             self.valve = both.valve_gain;
+            let a_base = (dt / T::c(BASELINE_SMOOTHING_S)).min(T::ONE);
+            for k in 0..2 {
+                self.baseline_now[k] += a_base * (self.baseline[k][region] - self.baseline_now[k]);
+            }
             let flows = [
-                both.flow_internal_lpm - self.baseline[0][region] * both.dp_10bar[0],
-                both.flow_external_lpm - self.baseline[1][region] * both.dp_10bar[1],
+                both.flow_internal_lpm - self.baseline_now[0] * both.dp_10bar[0],
+                both.flow_external_lpm - self.baseline_now[1] * both.dp_10bar[1],
             ];
             let sds = [both.flow_internal_sd_lpm, both.flow_external_sd_lpm];
             for k in 0..2 {

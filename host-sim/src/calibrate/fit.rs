@@ -479,9 +479,11 @@ pub fn fit_load(d: &Prepared, p: &mut Params, fits: &mut Vec<Fit>, q: &mut Quali
     geo.gravity_scale = 1.0;
     geo.inertia_scale = 1.0;
     geo.force_offset_n = 0.0;
-    // Normal equations for y = s·G0(x) + Fc·φ(v) + B·v.
-    let mut ata = [[0.0; 3]; 3];
-    let mut atb = [0.0; 3];
+    // Normal equations for y = s·G0(x) + F0 + Fc·φ(v) + B·v: a payload or
+    // an unmodelled attachment changes both the level and the shape of the
+    // gravity load, which the scale alone cannot follow.
+    let mut ata = [[0.0; 4]; 4];
+    let mut atb = [0.0; 4];
     let mut rows = Vec::new();
     let (mut up, mut down) = (0usize, 0usize);
     for &i in &d.steady {
@@ -492,9 +494,9 @@ pub fn fit_load(d: &Prepared, p: &mut Params, fits: &mut Vec<Fit>, q: &mut Quali
             - load.c2_kg_m * p.load.inertia_scale * v * v;
         let decay = stribeck_decay(fr.stribeck_s_per_m * v.abs());
         let phi = v.signum() * ((1.0 - decay) + ratio * decay);
-        let row = [load.gravity_n, phi, v];
-        for r in 0..3 {
-            for k in 0..3 {
+        let row = [load.gravity_n, 1.0, phi, v];
+        for r in 0..4 {
+            for k in 0..4 {
                 ata[r][k] += row[r] * row[k];
             }
             atb[r] += row[r] * y;
@@ -516,25 +518,38 @@ pub fn fit_load(d: &Prepared, p: &mut Params, fits: &mut Vec<Fit>, q: &mut Quali
         ));
         return;
     }
-    let Some([s, fc, b]) = solve(ata, atb) else {
+    // Without the offset when the stroke does not separate it from the
+    // scale (a nearly constant gravity load).
+    let with_offset = solve(ata, atb).filter(|[s, f0, _, _]| {
+        *s > 0.5 && *s < 2.5 && f0.abs() < 0.5 * load_terms_exact(&geo, 0.5 * c.stroke_m).gravity_n.abs()
+    });
+    let Some([s, f0, fc, b]) = with_offset.or_else(|| {
+        let a3 = [
+            [ata[0][0], ata[0][2], ata[0][3]],
+            [ata[2][0], ata[2][2], ata[2][3]],
+            [ata[3][0], ata[3][2], ata[3][3]],
+        ];
+        solve(a3, [atb[0], atb[2], atb[3]]).map(|[s, fc, b]| [s, 0.0, fc, b])
+    }) else {
         q.problems
             .push("load and friction: ill-conditioned regression".into());
         return;
     };
     let rms = (rows
         .iter()
-        .map(|(r, y)| (y - s * r[0] - fc * r[1] - b * r[2]).powi(2))
+        .map(|(r, y)| (y - s * r[0] - f0 - fc * r[2] - b * r[3]).powi(2))
         .sum::<f64>()
         / rows.len() as f64)
         .sqrt();
     q.force_residual_n = Some(rms);
-    if !(s > 0.7 && s < 1.3 && (0.0..5000.0).contains(&fc) && (0.0..100_000.0).contains(&b)) {
+    if !(s > 0.5 && s < 2.5 && (0.0..5000.0).contains(&fc) && (0.0..100_000.0).contains(&b)) {
         q.problems.push(format!(
             "load and friction implausible (gravity ×{s:.3}, Coulomb {fc:.0} N, viscous {b:.0} N·s/m)"
         ));
         return;
     }
     p.load.gravity_scale = s;
+    p.load.force_offset_n = f0;
     // The unaccounted mass moves with the crane: scale inertia alike.
     p.load.inertia_scale = s;
     p.friction.coulomb_n = fc;
@@ -542,7 +557,7 @@ pub fn fit_load(d: &Prepared, p: &mut Params, fits: &mut Vec<Fit>, q: &mut Quali
     p.friction.viscous_ns_per_m = b;
     fits.push(Fit {
         what: "load (gravity and moving mass scale)".into(),
-        value: format!("× {s:.4}"),
+        value: format!("× {s:.4}, offset {f0:+.0} N"),
         quality: format!(
             "{} samples ({up} up, {down} down), force residual {rms:.0} N ({:.0} N of it pressure noise)",
             rows.len(),

@@ -100,13 +100,24 @@ pub const MAX_VALVE_RESIDUAL: f64 = 0.05;
 /// the fit is refused. Healthy: ≤ 10 N at any noise level (the residual
 /// itself grows to 43 N at 0.6 bar, all of it noise); 40 N is ≈ 8 % of the
 /// Coulomb friction, 0.13 bar on the piston side: a load the model does not
-/// describe (a second actuator, a spring, a mis-set geometry).
-pub const MAX_FORCE_EXCESS_N: f64 = 40.0;
+/// describe (a second actuator, a spring, a mis-set geometry). On the
+/// independent plant (payloads at the crane tip, other friction laws) the
+/// excess reached 60–70 N with a model that still tracks the plant: 120 N
+/// refuses, above 40 N is a warning.
+pub const MAX_FORCE_EXCESS_N: f64 = 120.0;
 /// Mean NIS of the leading hypothesis on the held-out part above which the
 /// validation fails (≈ 3 when model and noise levels are consistent).
 /// Healthy after calibration: 1.5–2.9; the uncalibrated monitor (told
 /// 0.08 bar) on a 0.5 bar rig: 22–26.
 pub const MAX_VALIDATION_NIS: f64 = 9.0;
+/// The detection floor is this many times the largest detection reading
+/// (0.25 s average) the leak-free recording gave: the CUSUM needs the
+/// excess to persist, and a 60 s recording does not show the worst of an
+/// hour.
+pub const FLOOR_MARGIN: f64 = 1.5;
+/// A floor above this is no leak monitor: refuse, the model does not
+/// describe the installation (healthy readings up to 1.3 l/min).
+pub const MAX_DETECTION_FLOOR_LPM: f64 = 2.0;
 /// Fraction of the held-out time with evidence weight > 0.5 below which
 /// the validation cannot judge (the monitor barely evaluates evidence).
 /// Healthy: 44–93 % (the lower figures at 0.6 bar).
@@ -184,6 +195,9 @@ pub struct Fit {
 pub struct Calibration {
     /// The fitted parameters.
     pub params: Params,
+    /// The valve, load and friction were not determined by the recording
+    /// and were kept (see the first warning).
+    pub partial: bool,
     /// What was fitted (the written, whole-recording fit), one line each.
     pub fits: Vec<Fit>,
     /// Things the engineer should know.
@@ -335,6 +349,7 @@ fn fit_plant(
     samples: &[&[Sample]],
     start: &Params,
     search_air: bool,
+    mechanics: bool,
 ) -> Result<PlantFit, CalibrationError> {
     let mut p = start.clone();
     p.baseline = Default::default();
@@ -342,10 +357,12 @@ fn fit_plant(
     let mut warnings = Vec::new();
     let mut quality = Quality::default();
     let mut baseline_notes = Vec::new();
-    let d = fit::prepare_pieces(samples);
-    fit::fit_valve(&d, &mut p, &mut fits, &mut warnings, &mut quality);
-    fit::fit_load(&d, &mut p, &mut fits, &mut quality);
-    quality.problems.extend(quality_problems(&quality));
+    if mechanics {
+        let d = fit::prepare_pieces(samples);
+        fit::fit_valve(&d, &mut p, &mut fits, &mut warnings, &mut quality);
+        fit::fit_load(&d, &mut p, &mut fits, &mut quality);
+        quality.problems.extend(quality_problems(&quality));
+    }
     let done = |p, fits, warnings, quality, baseline_notes| {
         Ok(PlantFit {
             params: p,
@@ -470,7 +487,42 @@ fn missing_motion(m: &Motion, need: f64, part: &str) -> Option<String> {
 }
 
 /// Calibrate from a healthy recording, starting from `start`.
+///
+/// When the recording does not determine the valve and the load (too few
+/// quasi-steady moves, or regressions too poor to trust) the calibration
+/// is *partial*: those stay as in `start` (said first among the warnings)
+/// and the rest — noise, healthy leakage, per-region baseline, detection
+/// floor — is fitted and validated as usual. Refused only if that fails
+/// too (the original reason is returned).
 pub fn calibrate(samples: &[Sample], start: &Params) -> Result<Calibration, CalibrationError> {
+    // A recording without moves in both directions cannot even validate
+    // a partial calibration: the monitor must have seen both.
+    let moves = Motion::of(&fit::prepare(samples));
+    let both_ways = moves.extend_s > 0.0 && moves.retract_s > 0.0;
+    match calibrate_with(samples, start, true) {
+        Err(e @ (CalibrationError::NotEnoughMotion { .. } | CalibrationError::PoorFit { .. }))
+            if both_ways =>
+        {
+            let why = e.to_string();
+            let mut cal = calibrate_with(samples, start, false).map_err(|_| e)?;
+            cal.warnings.insert(
+                0,
+                format!("partial calibration: the valve, load and friction are kept as they were, because {why}"),
+            );
+            cal.partial = true;
+            Ok(cal)
+        }
+        r => r,
+    }
+}
+
+/// The calibration, with the valve and load regressions (`mechanics`) or
+/// without.
+fn calibrate_with(
+    samples: &[Sample],
+    start: &Params,
+    mechanics: bool,
+) -> Result<Calibration, CalibrationError> {
     start.validate().map_err(CalibrationError::Params)?;
     let (t0, duration) = match (samples.first(), samples.last()) {
         (Some(a), Some(b)) => (a.t_s, b.t_s - a.t_s),
@@ -529,7 +581,11 @@ pub fn calibrate(samples: &[Sample], start: &Params) -> Result<Calibration, Cali
     cal.motion = Motion::of(&fit::prepare(samples));
     let mut missing = missing_motion(&cal.motion, MIN_STEADY_S, "the recording");
     let mut held = None;
-    if missing.is_none() {
+    if !mechanics {
+        // Nothing fitted from the moves: the last third is held out.
+        missing = None;
+        held = Some(HeldOut::third(samples, 2, "last"));
+    } else if missing.is_none() {
         for (k, name) in [(2, "last"), (1, "middle"), (0, "first")] {
             let h = HeldOut::third(samples, k, name);
             let m = Motion::of(&fit::prepare_pieces(&h.fit_pieces(samples)));
@@ -563,7 +619,7 @@ pub fn calibrate(samples: &[Sample], start: &Params) -> Result<Calibration, Cali
     cal.fit_s = duration - (held.t.1 - held.t.0);
 
     // 1–5 on the first two thirds, then validation on the last third.
-    let part = fit_plant(&fit_pieces, &p, true)?;
+    let part = fit_plant(&fit_pieces, &p, true, mechanics)?;
     cal.quality[0] = part.quality.clone();
     if !part.quality.problems.is_empty() {
         let why = format!(
@@ -588,22 +644,32 @@ pub fn calibrate(samples: &[Sample], start: &Params) -> Result<Calibration, Cali
             v.leading_nis
         ));
     }
-    if let Some((t, verdict)) = v.alarms.first() {
+    // Alarms on the held-out part are judged with the floor the fit part
+    // alone would set: the floor is how the monitor lives with the model
+    // error it measured.
+    let part_floor = check::run_pieces(&fit_pieces, &part.params, (f64::NEG_INFINITY, f64::INFINITY))?
+        .detect_max_lpm
+        .map(|d| FLOOR_MARGIN * d);
+    let mut floored = part.params.clone();
+    floored.baseline.detection_floor_lpm = part_floor.map(|f| f.min(MAX_DETECTION_FLOOR_LPM));
+    let vf = check::run_pieces(&[samples], &floored, held.t)?;
+    if let Some((t, verdict)) = vf.alarms.first() {
         failed.push(format!(
-            "a leak alarm ({}) at t = {t:.1} s on a recording declared healthy",
-            verdict.name()
+            "a leak alarm ({}) at t = {t:.1} s on a recording declared healthy, with the detection floor of the fit part ({:.3} / {:.3} l/min)",
+            verdict.name(),
+            part_floor[0],
+            part_floor[1]
         ));
     }
-    // The user's alarm level on the reported (4 s) average: healthy
-    // simulated rigs read ≤ 0.044 l/min there (thesis profile), ≤ 0.05
-    // (random work); the monitor's own reading, so that a monitor which
-    // subtracts the per-region baseline is judged with it.
-    let alarm = p.alarm.alarm_lpm;
+    // What the leak-free installation still reads on the held-out part
+    // decides the detection floor (below); a floor no leak monitor can
+    // work with is a refusal.
     for (k, name) in ["internal", "external"].iter().enumerate() {
-        if v.leak_max_lpm[k] > alarm {
+        let floor = FLOOR_MARGIN * v.detect_max_lpm[k];
+        if floor > MAX_DETECTION_FLOOR_LPM {
             failed.push(format!(
-                "healthy {name} leak reading up to {:.3} l/min, above the alarm level {alarm} l/min",
-                v.leak_max_lpm[k]
+                "healthy {name} detection reading up to {:.3} l/min on the held-out part: the model does not describe this installation well enough to tell leaks below {floor:.2} l/min (limit {MAX_DETECTION_FLOOR_LPM})",
+                v.detect_max_lpm[k]
             ));
         }
     }
@@ -643,7 +709,7 @@ pub fn calibrate(samples: &[Sample], start: &Params) -> Result<Calibration, Cali
     // validated fit's.
     let mut q = p.clone();
     q.fluid.air_fraction = part.params.fluid.air_fraction;
-    let full = fit_plant(&[samples], &q, false)?;
+    let full = fit_plant(&[samples], &q, false, mechanics)?;
     cal.quality[1] = full.quality.clone();
     cal.fits = full.fits;
     // The air content is the validated fit's: its line and warning.
@@ -706,6 +772,29 @@ pub fn calibrate(samples: &[Sample], start: &Params) -> Result<Calibration, Cali
     cal.nis_after = after.healthy_nis;
     cal.leak_after_lpm = after.detect_max_lpm;
     cal.params = full.params;
+    // The detection floor: what this leak-free installation still reads,
+    // with a margin, wherever it exceeds the user's alarm level.
+    let alarm = cal.params.alarm.alarm_lpm;
+    let floor: [f64; 2] = core::array::from_fn(|k| {
+        let seen = after.detect_max_lpm[k].max(v.detect_max_lpm[k]);
+        let f = FLOOR_MARGIN * seen;
+        if f > alarm {
+            // Rounded up to 0.01 l/min: a figure an engineer reads.
+            ((f * 100.0).ceil() / 100.0).min(MAX_DETECTION_FLOOR_LPM)
+        } else {
+            0.0
+        }
+    });
+    cal.params.baseline.detection_floor_lpm = floor;
+    if floor.iter().any(|f| *f > 0.0) {
+        cal.warnings.push(format!(
+            "detection floor: this installation's leak-free readings reach {:.3} / {:.3} l/min (internal / external); leaks alarm from {:.2} / {:.2} l/min instead of the alarm level {alarm} l/min",
+            after.detect_max_lpm[0].max(v.detect_max_lpm[0]),
+            after.detect_max_lpm[1].max(v.detect_max_lpm[1]),
+            alarm.max(floor[0]),
+            alarm.max(floor[1]),
+        ));
+    }
     Ok(cal)
 }
 
