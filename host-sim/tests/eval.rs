@@ -397,6 +397,33 @@ fn temp_column_on_even_rigs_and_quick_covers_every_condition() {
     conds.sort_unstable();
     conds.dedup();
     assert_eq!(conds.len(), 4, "{conds:?}");
+    // Each supply and each temperature with and without the column.
+    for pick in [|c: &Cell| c.supply_bar, |c: &Cell| c.temp_c] {
+        let mut seen: Vec<(u64, bool)> = q
+            .cells
+            .iter()
+            .map(|c| (pick(&c.cell) as u64, c.cell.temp_column))
+            .collect();
+        seen.sort_unstable();
+        seen.dedup();
+        assert_eq!(seen.len(), 4, "{seen:?}");
+    }
+    // So do the cells with the long hold and the faults in the full matrix.
+    let full = plan(&PlanConfig::default());
+    let mut special: Vec<(u64, u64, bool)> = full
+        .specs()
+        .filter(|s| s.category == Category::HealthyLongHold)
+        .map(|s| {
+            (
+                s.cell.supply_bar as u64,
+                s.cell.temp_c as u64,
+                s.cell.temp_column,
+            )
+        })
+        .collect();
+    special.sort_unstable();
+    special.dedup();
+    assert!(special.len() >= 5, "{special:?}");
     // Step amplitudes are drawn within ±0.2..0.6, both signs.
     let amps: Vec<f64> = plan(&PlanConfig::default())
         .specs()

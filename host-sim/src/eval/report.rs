@@ -352,7 +352,14 @@ pub fn fault_table(out: &mut String, runs: &[&RunResult]) {
         act.sort_by_key(|b| std::cmp::Reverse(b.1));
         let act = act
             .iter()
-            .map(|(v, k)| format!("{v} {:.0} %", 100.0 * *k as f64 / total.max(1) as f64))
+            .map(|(v, k)| {
+                let p = 100.0 * *k as f64 / total.max(1) as f64;
+                if p < 0.5 {
+                    format!("{v} <1 %")
+                } else {
+                    format!("{v} {p:.0} %")
+                }
+            })
             .collect::<Vec<_>>()
             .join(", ");
         let to_fault: Vec<f64> = rs
