@@ -228,8 +228,12 @@ fn fault_expectations() {
         if kind.expects_sensor_fault() {
             assert!(result(s.clone(), "sensor_fault", &[]).passes(), "{kind:?}");
             assert!(!result(s.clone(), "healthy", &[]).passes());
-            let leak = result(s, "sensor_fault", &[(25.0, "external")]);
+            let leak = result(s.clone(), "sensor_fault", &[(25.0, "external")]);
             assert!(leak.false_alarm() && !leak.passes());
+            // A false alarm of the healthy plant before the fault is a false
+            // alarm, not a failure to handle the fault.
+            let before = result(s, "sensor_fault", &[(12.0, "external")]);
+            assert!(before.false_alarm() && before.passes(), "{kind:?}");
         } else {
             let mut ok = result(s.clone(), "healthy", &[]);
             ok.fault_verdicts.insert("inconclusive".into(), 1800);
