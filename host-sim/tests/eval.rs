@@ -228,8 +228,12 @@ fn fault_expectations() {
         if kind.expects_sensor_fault() {
             assert!(result(s.clone(), "sensor_fault", &[]).passes(), "{kind:?}");
             assert!(!result(s.clone(), "healthy", &[]).passes());
-            let leak = result(s, "sensor_fault", &[(25.0, "external")]);
+            let leak = result(s.clone(), "sensor_fault", &[(25.0, "external")]);
             assert!(leak.false_alarm() && !leak.passes());
+            // A false alarm of the healthy plant before the fault is a false
+            // alarm, not a failure to handle the fault.
+            let before = result(s, "sensor_fault", &[(12.0, "external")]);
+            assert!(before.false_alarm() && before.passes(), "{kind:?}");
         } else {
             let mut ok = result(s.clone(), "healthy", &[]);
             ok.fault_verdicts.insert("inconclusive".into(), 1800);
@@ -397,6 +401,33 @@ fn temp_column_on_even_rigs_and_quick_covers_every_condition() {
     conds.sort_unstable();
     conds.dedup();
     assert_eq!(conds.len(), 4, "{conds:?}");
+    // Each supply and each temperature with and without the column.
+    for pick in [|c: &Cell| c.supply_bar, |c: &Cell| c.temp_c] {
+        let mut seen: Vec<(u64, bool)> = q
+            .cells
+            .iter()
+            .map(|c| (pick(&c.cell) as u64, c.cell.temp_column))
+            .collect();
+        seen.sort_unstable();
+        seen.dedup();
+        assert_eq!(seen.len(), 4, "{seen:?}");
+    }
+    // So do the cells with the long hold and the faults in the full matrix.
+    let full = plan(&PlanConfig::default());
+    let mut special: Vec<(u64, u64, bool)> = full
+        .specs()
+        .filter(|s| s.category == Category::HealthyLongHold)
+        .map(|s| {
+            (
+                s.cell.supply_bar as u64,
+                s.cell.temp_c as u64,
+                s.cell.temp_column,
+            )
+        })
+        .collect();
+    special.sort_unstable();
+    special.dedup();
+    assert!(special.len() >= 5, "{special:?}");
     // Step amplitudes are drawn within ±0.2..0.6, both signs.
     let amps: Vec<f64> = plan(&PlanConfig::default())
         .specs()

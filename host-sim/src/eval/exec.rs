@@ -437,8 +437,10 @@ fn write_cached(path: &Path, text: &[u8]) -> Result<()> {
         std::process::id() as u64 * 1000 + thread_tag()
     ));
     let f = std::fs::File::create(&tmp).with_context(|| format!("{}", tmp.display()))?;
+    // The fastest level: the default one costs about 0.2 s per minute of
+    // recording (a quarter of the plant's time) for files ~40 % smaller.
     let mut gz =
-        flate2::write::GzEncoder::new(std::io::BufWriter::new(f), flate2::Compression::default());
+        flate2::write::GzEncoder::new(std::io::BufWriter::new(f), flate2::Compression::fast());
     gz.write_all(text)?;
     gz.finish()?.flush()?;
     std::fs::rename(&tmp, path).with_context(|| format!("{}", path.display()))?;

@@ -299,14 +299,11 @@ impl RunSpec {
         self.leak.internal_lpm.max(self.leak.external_lpm)
     }
 
-    /// Planned length, s (a long hold's moves around the hold estimated):
-    /// the scheduling cost.
+    /// Planned length, s: the scheduling cost (a leak costs the plant a
+    /// second calibration pass).
     pub fn planned_s(&self) -> f64 {
-        match self.scenario {
-            plant::Scenario::ClosedLoop { duration_s, .. } => duration_s,
-            plant::Scenario::StepTest { duration_s, .. } => duration_s,
-            plant::Scenario::LongHold { hold_s, .. } => hold_s + 60.0,
-        }
+        let passes = if self.has_leak() { 2.0 } else { 1.0 };
+        passes * plant::planned_duration_s(&self.scenario)
     }
 }
 

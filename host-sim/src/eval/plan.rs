@@ -226,9 +226,12 @@ pub fn fault_window(faults: &[Fault]) -> Option<(f64, Option<f64>)> {
 /// also from the start), both leaks at each size of [`BOTH_SIZES_LPM`], and
 /// step tests with a leak (internal on even rigs, external on odd) of each
 /// size in [`STEP_LEAK_LPM`]. On one cell per rig (rotating through the
-/// conditions): a healthy long hold and the same hold with a 0.3 l/min leak
+/// conditions, see below): a healthy long hold and the same hold with a 0.3 l/min leak
 /// starting after 600 s of holding, and every fault on the first healthy
-/// closed-loop run's plant. `--quick`: one cell per rig (rotating), one
+/// closed-loop run's plant. `--quick`: one cell per rig (the rig with index
+/// `i` in its set gets condition `(i + i/2) mod n`, so that with 4 conditions
+/// and 6 rigs each supply and temperature is covered with and without the
+/// `temp_oil` column), one
 /// healthy closed-loop run, 0.2 and 0.5 l/min single leaks, 0.5 l/min both,
 /// a 1.0 l/min step-test leak, a 120 s hold and four faults.
 pub fn plan(config: &PlanConfig) -> Plan {
@@ -244,13 +247,15 @@ pub fn plan(config: &PlanConfig) -> Plan {
         let n = config.rigs.unwrap_or(seeds.len()).min(seeds.len());
         for (i, &rig) in seeds[..n].iter().enumerate() {
             let temp_column = rig % 2 == 0;
+            // Rotate through the conditions so that every condition, and
+            // each supply and temperature with and without the `temp_oil`
+            // column, gets a rig (a plain `i % n` would tie the column's
+            // parity to one condition).
+            let k = (i + i / 2) % conditions.len().max(1);
             let (conds, special) = if config.quick {
-                let ns = config.supply_bar.len().max(1);
-                let nt = config.temp_c.len().max(1);
-                let c = (config.supply_bar[i % ns], config.temp_c[(i / ns) % nt]);
-                (vec![c], 0)
+                (vec![conditions[k]], 0)
             } else {
-                (conditions.clone(), i % conditions.len().max(1))
+                (conditions.clone(), k)
             };
             for (ci, &(supply_bar, temp_c)) in conds.iter().enumerate() {
                 let cell = Cell {

@@ -109,6 +109,19 @@ impl RunResult {
         self.peak_detect_lpm[0].max(self.peak_detect_lpm[1])
     }
 
+    /// When the run's fault starts, s.
+    pub fn fault_start_s(&self) -> Option<f64> {
+        super::plan::fault_window(&self.spec.faults).map(|w| w.0)
+    }
+
+    /// Leak alarms from the start of the fault on (earlier ones are false
+    /// alarms of the healthy plant, counted as such but not against the
+    /// fault's expectation).
+    pub fn fault_leak_alarms(&self) -> impl Iterator<Item = &Alarm> {
+        let from = self.fault_start_s().unwrap_or(f64::INFINITY);
+        self.leak_alarms().filter(move |a| a.t_s >= from)
+    }
+
     /// A fault run: while its fault was active the verdict was never
     /// `healthy` nor a leak (and it was active at all).
     pub fn fault_never_healthy(&self) -> bool {
@@ -129,7 +142,9 @@ impl RunResult {
             Category::Leak | Category::LeakAfterHold => "detected and isolated",
             Category::StepLeak => "detected",
             Category::Fault => match self.spec.fault {
-                Some(f) if f.expects_sensor_fault() => "sensor_fault, no leak alarm",
+                Some(f) if f.expects_sensor_fault() => {
+                    "sensor_fault, no leak alarm after the fault"
+                }
                 _ => "never healthy nor a leak while active",
             },
         }
@@ -145,7 +160,7 @@ impl RunResult {
             Category::Leak | Category::LeakAfterHold => !self.false_alarm() && self.isolated(),
             Category::StepLeak => !self.false_alarm() && self.detected(),
             Category::Fault => {
-                let no_leak = self.leak_alarms().next().is_none();
+                let no_leak = self.fault_leak_alarms().next().is_none();
                 match self.spec.fault {
                     Some(f) if f.expects_sensor_fault() => no_leak && self.verdict == SENSOR_FAULT,
                     _ => no_leak && self.fault_never_healthy(),
