@@ -140,7 +140,10 @@ fn a_minute_of_normal_work_is_accepted_and_reads_healthy_on_another_recording() 
             monitor::load::load_terms_exact(l, x).gravity_n + l.force_offset_n
         };
         let (fit, want) = (g(&p.load), g(&truth.load));
-        assert!((fit / want - 1.0).abs() < 0.08, "at {x} m: {fit} N, want {want} N\n{report}");
+        assert!(
+            (fit / want - 1.0).abs() < 0.08,
+            "at {x} m: {fit} N, want {want} N\n{report}"
+        );
     }
     // The noise written is the measured one.
     assert!(

@@ -521,7 +521,9 @@ pub fn fit_load(d: &Prepared, p: &mut Params, fits: &mut Vec<Fit>, q: &mut Quali
     // Without the offset when the stroke does not separate it from the
     // scale (a nearly constant gravity load).
     let with_offset = solve(ata, atb).filter(|[s, f0, _, _]| {
-        *s > 0.5 && *s < 2.5 && f0.abs() < 0.5 * load_terms_exact(&geo, 0.5 * c.stroke_m).gravity_n.abs()
+        *s > 0.5
+            && *s < 2.5
+            && f0.abs() < 0.5 * load_terms_exact(&geo, 0.5 * c.stroke_m).gravity_n.abs()
     });
     let Some([s, f0, fc, b]) = with_offset.or_else(|| {
         let a3 = [

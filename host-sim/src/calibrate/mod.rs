@@ -647,9 +647,13 @@ fn calibrate_with(
     // Alarms on the held-out part are judged with the floor the fit part
     // alone would set: the floor is how the monitor lives with the model
     // error it measured.
-    let part_floor = check::run_pieces(&fit_pieces, &part.params, (f64::NEG_INFINITY, f64::INFINITY))?
-        .detect_max_lpm
-        .map(|d| FLOOR_MARGIN * d);
+    let part_floor = check::run_pieces(
+        &fit_pieces,
+        &part.params,
+        (f64::NEG_INFINITY, f64::INFINITY),
+    )?
+    .detect_max_lpm
+    .map(|d| FLOOR_MARGIN * d);
     let mut floored = part.params.clone();
     floored.baseline.detection_floor_lpm = part_floor.map(|f| f.min(MAX_DETECTION_FLOOR_LPM));
     let vf = check::run_pieces(&[samples], &floored, held.t)?;
