@@ -139,7 +139,12 @@ fn a_gap_in_time_restarts_the_filters() {
     }
     let st = replay::<f32>(&s);
     assert!(st[30_000].events.contains(&Event::DataGap));
-    assert!(st.iter().all(|x| x.verdict == Verdict::Healthy));
+    // Never a leak; right after the gap no claim (the filters restart),
+    // and healthy again once they have seen evidence.
+    assert!(st.iter().all(|x| !x.verdict.is_leak()));
+    assert_eq!(st[30_000].verdict, Verdict::Inconclusive);
+    assert_eq!(st[30_500].verdict, Verdict::Inconclusive);
+    assert_eq!(st.last().unwrap().verdict, Verdict::Healthy);
 }
 
 #[test]

@@ -349,7 +349,7 @@ fn fit_plant(
     samples: &[&[Sample]],
     start: &Params,
     search_air: bool,
-    mechanics: bool,
+    mechanics: Mechanics,
 ) -> Result<PlantFit, CalibrationError> {
     let mut p = start.clone();
     p.baseline = Default::default();
@@ -357,11 +357,64 @@ fn fit_plant(
     let mut warnings = Vec::new();
     let mut quality = Quality::default();
     let mut baseline_notes = Vec::new();
-    if mechanics {
-        let d = fit::prepare_pieces(samples);
-        fit::fit_valve(&d, &mut p, &mut fits, &mut warnings, &mut quality);
-        fit::fit_load(&d, &mut p, &mut fits, &mut quality);
-        quality.problems.extend(quality_problems(&quality));
+    match mechanics {
+        Mechanics::Strict => {
+            let d = fit::prepare_pieces(samples);
+            fit::fit_valve(&d, &mut p, &mut fits, &mut warnings, &mut quality);
+            fit::fit_load(&d, &mut p, &mut fits, &mut quality);
+            quality.problems.extend(quality_problems(&quality));
+        }
+        Mechanics::Lenient => {
+            // Each regression on its own: what is implausible is kept and
+            // said, what fits well enough is used.
+            let d = fit::prepare_pieces(samples);
+            let mut valve = p.clone();
+            let mut q = Quality::default();
+            let mut f = Vec::new();
+            fit::fit_valve(&d, &mut valve, &mut f, &mut warnings, &mut q);
+            let r2_ok = q
+                .valve_r2
+                .iter()
+                .flatten()
+                .all(|r2| *r2 >= LENIENT_VALVE_R2);
+            let res_ok = q
+                .valve_rel_residual
+                .iter()
+                .flatten()
+                .all(|r| *r <= LENIENT_VALVE_RESIDUAL);
+            if q.problems.is_empty() && r2_ok && res_ok {
+                p.valve = valve.valve;
+                fits.extend(f);
+            } else {
+                warnings.push(format!(
+                    "valve not fitted (kept): {}",
+                    q.problems
+                        .iter()
+                        .cloned()
+                        .chain(quality_problems(&q))
+                        .collect::<Vec<_>>()
+                        .join("; ")
+                ));
+            }
+            let mut load = p.clone();
+            let mut ql = Quality::default();
+            let mut fl = Vec::new();
+            fit::fit_load(&d, &mut load, &mut fl, &mut ql);
+            if ql.problems.is_empty() {
+                p.load = load.load;
+                p.friction = load.friction;
+                fits.extend(fl);
+                quality.force_residual_n = ql.force_residual_n;
+            } else {
+                warnings.push(format!(
+                    "load not fitted (kept): {}",
+                    ql.problems.join("; ")
+                ));
+            }
+            quality.valve_r2 = q.valve_r2;
+            quality.valve_rel_residual = q.valve_rel_residual;
+        }
+        Mechanics::Kept => {}
     }
     let done = |p, fits, warnings, quality, baseline_notes| {
         Ok(PlantFit {
@@ -490,24 +543,46 @@ fn missing_motion(m: &Motion, need: f64, part: &str) -> Option<String> {
 ///
 /// When the recording does not determine the valve and the load (too few
 /// quasi-steady moves, or regressions too poor to trust) the calibration
-/// is *partial*: those stay as in `start` (said first among the warnings)
-/// and the rest — noise, healthy leakage, per-region baseline, detection
-/// floor — is fitted and validated as usual. Refused only if that fails
-/// too (the original reason is returned).
+/// is *partial* (said first among the warnings): the valve and the load
+/// are each used if their regression passes the lenient limits
+/// ([`LENIENT_VALVE_R2`], [`LENIENT_VALVE_RESIDUAL`], a plausible load),
+/// else kept as in `start`; the rest — noise, healthy leakage, per-region
+/// baseline, detection floor — is fitted and validated as usual. Refused
+/// only if that fails too (both reasons are returned).
 pub fn calibrate(samples: &[Sample], start: &Params) -> Result<Calibration, CalibrationError> {
     // A recording without moves in both directions cannot even validate
     // a partial calibration: the monitor must have seen both.
     let moves = Motion::of(&fit::prepare(samples));
     let both_ways = moves.extend_s > 0.0 && moves.retract_s > 0.0;
-    match calibrate_with(samples, start, true) {
+    match calibrate_with(samples, start, Mechanics::Strict) {
         Err(e @ (CalibrationError::NotEnoughMotion { .. } | CalibrationError::PoorFit { .. }))
             if both_ways =>
         {
             let why = e.to_string();
-            let mut cal = calibrate_with(samples, start, false).map_err(|_| e)?;
+            let partial = calibrate_with(samples, start, Mechanics::Lenient)
+                .or_else(|_| calibrate_with(samples, start, Mechanics::Kept));
+            let mut cal = partial.map_err(|partial| {
+                // Say both: why the full calibration was refused, and why
+                // keeping the valve and load did not pass either.
+                let also =
+                    format!("; a partial calibration (valve and load kept) failed too: {partial}");
+                match e {
+                    CalibrationError::NotEnoughMotion { missing, report } => {
+                        CalibrationError::NotEnoughMotion {
+                            missing: missing + &also,
+                            report,
+                        }
+                    }
+                    CalibrationError::PoorFit { why, report } => CalibrationError::PoorFit {
+                        why: why + &also,
+                        report,
+                    },
+                    other => other,
+                }
+            })?;
             cal.warnings.insert(
                 0,
-                format!("partial calibration: the valve, load and friction are kept as they were, because {why}"),
+                format!("partial calibration: what the recording determines well enough is fitted, the rest kept as it was (listed below), because {why}"),
             );
             cal.partial = true;
             Ok(cal)
@@ -516,12 +591,31 @@ pub fn calibrate(samples: &[Sample], start: &Params) -> Result<Calibration, Cali
     }
 }
 
-/// The calibration, with the valve and load regressions (`mechanics`) or
-/// without.
+/// How the valve and load regressions are judged.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Mechanics {
+    /// Fitted, refused below the thresholds above.
+    Strict,
+    /// Fitted, accepted down to a valve R² of [`LENIENT_VALVE_R2`], a
+    /// residual of [`LENIENT_VALVE_RESIDUAL`] (an independent rig's valve
+    /// leaks and meters otherwise than the model's; the fit is still far
+    /// better than the nominal valve), the load only if plausible.
+    Lenient,
+    /// Not fitted: kept as they were.
+    Kept,
+}
+
+/// Lowest valve R² of a lenient (partial) calibration.
+pub const LENIENT_VALVE_R2: f64 = 0.9;
+/// Largest valve residual of a lenient calibration, relative to the flow.
+pub const LENIENT_VALVE_RESIDUAL: f64 = 0.15;
+
+/// The calibration, with the valve and load regressions judged as
+/// `mechanics` says.
 fn calibrate_with(
     samples: &[Sample],
     start: &Params,
-    mechanics: bool,
+    mechanics: Mechanics,
 ) -> Result<Calibration, CalibrationError> {
     start.validate().map_err(CalibrationError::Params)?;
     let (t0, duration) = match (samples.first(), samples.last()) {
@@ -581,8 +675,8 @@ fn calibrate_with(
     cal.motion = Motion::of(&fit::prepare(samples));
     let mut missing = missing_motion(&cal.motion, MIN_STEADY_S, "the recording");
     let mut held = None;
-    if !mechanics {
-        // Nothing fitted from the moves: the last third is held out.
+    if mechanics != Mechanics::Strict {
+        // A partial calibration: the last third is held out.
         missing = None;
         held = Some(HeldOut::third(samples, 2, "last"));
     } else if missing.is_none() {
