@@ -66,20 +66,6 @@ fn main() {
     let p = Params::nominal();
     let none = Leak::default();
     type Edit = fn(&mut RigSpec);
-    let quiet_sensors: Edit = |r| {
-        for c in r.sensors.pressure.iter_mut() {
-            c.white_sigma = 0.02;
-            c.coloured_sigma = 0.0;
-            c.lag_s = 0.0;
-            c.ripple_pickup = 0.0;
-            c.offset = 0.0;
-        }
-        r.sensors.position.white_sigma = 1e-5;
-        r.sensors.position.coloured_sigma = 0.0;
-        r.sensors.position.lag_s = 0.0;
-        r.sensors.position.offset = 0.0;
-        r.sensors.valve_command_offset = 0.0;
-    };
     let variants: Vec<(&str, Edit)> = vec![
         ("as drawn", |_| {}),
         ("quiet sensors", quiet_sensors),
@@ -109,83 +95,23 @@ fn main() {
         ("land leak 0", |r| {
             r.valve.land_leak_lpm_per_bar = [0.0; 4];
         }),
-        ("nominal valve gains/overlap", |r| {
-            r.valve.flow_gain_lpm_sqrt_bar = [7.9025, 7.9025, 7.4187, 7.4187];
-            r.valve.overlap = [0.015; 4];
-            r.valve.null_bias = 0.0;
-        }),
+        ("nominal valve gains/overlap", nominal_valve),
         ("ideal supply/tank", |r| {
-            r.supply.ripple_bar = [0.0; 3];
-            r.supply.droop_bar = 0.2;
-            r.supply.pump_max_lpm = 60.0;
+            ideal_supply(r);
             r.supply.tank_bar = 0.8;
         }),
-        ("nominal air/bulk", |r| {
-            r.fluid.air_fraction = 0.01;
-            r.fluid.bulk_modulus_bar = 16000.0;
-            r.cylinder.hose_fraction = 0.0;
-        }),
-        ("nominal load", |r| {
-            r.load.masses_kg = [6.12844, 15.36792, 13.62235, 87.92456];
-            r.load.inertias_kg_m2 = [0.070_673, 1.321_969, 0.879_096, 53.414_170];
-            r.load.payload_kg = 0.0;
-            r.load.force_offset_n = 0.0;
-        }),
-        ("nominal friction", |r| {
-            r.friction.coulomb_n = 480.0;
-            r.friction.breakaway_n = 990.0;
-            r.friction.viscous_ns_per_m = 5000.0;
-            r.friction.viscous_viscosity_exponent = 0.0;
-        }),
-        ("nominal cylinder", |r| {
-            r.cylinder.piston_area_m2 = 3.117e-3;
-            r.cylinder.rod_area_m2 = 2.41e-3;
-            r.cylinder.dead_volume_piston_m3 = 2e-4;
-            r.cylinder.dead_volume_rod_m3 = 2e-4;
-        }),
-        ("all of the above", |r| {
-            quiet_sensors_all(r);
-        }),
+        ("nominal air/bulk", nominal_fluid),
+        ("nominal load", nominal_load),
+        ("nominal friction", nominal_friction),
+        ("nominal cylinder", nominal_cylinder),
+        ("all of the above", everything_but_mechanics),
         ("all + load + friction + cyl", |r| {
-            quiet_sensors_all(r);
-            r.load.masses_kg = [6.12844, 15.36792, 13.62235, 87.92456];
-            r.load.inertias_kg_m2 = [0.070_673, 1.321_969, 0.879_096, 53.414_170];
-            r.load.payload_kg = 0.0;
-            r.load.force_offset_n = 0.0;
-            r.friction.coulomb_n = 480.0;
-            r.friction.breakaway_n = 990.0;
-            r.friction.viscous_ns_per_m = 5000.0;
-            r.friction.viscous_viscosity_exponent = 0.0;
-            r.cylinder.piston_area_m2 = 3.117e-3;
-            r.cylinder.rod_area_m2 = 2.41e-3;
-            r.cylinder.dead_volume_piston_m3 = 2e-4;
-            r.cylinder.dead_volume_rod_m3 = 2e-4;
+            everything_but_mechanics(r);
+            nominal_load(r);
+            nominal_friction(r);
+            nominal_cylinder(r);
         }),
     ];
-    fn quiet_sensors_all(r: &mut RigSpec) {
-        for c in r.sensors.pressure.iter_mut() {
-            c.white_sigma = 0.02;
-            c.coloured_sigma = 0.0;
-            c.lag_s = 0.0;
-            c.ripple_pickup = 0.0;
-            c.offset = 0.0;
-        }
-        r.sensors.position.white_sigma = 1e-5;
-        r.sensors.position.coloured_sigma = 0.0;
-        r.sensors.position.lag_s = 0.0;
-        r.sensors.position.offset = 0.0;
-        r.sensors.valve_command_offset = 0.0;
-        r.valve.land_leak_lpm_per_bar = [3.3e-3; 4];
-        r.valve.flow_gain_lpm_sqrt_bar = [7.9025, 7.9025, 7.4187, 7.4187];
-        r.valve.overlap = [0.015; 4];
-        r.valve.null_bias = 0.0;
-        r.supply.ripple_bar = [0.0; 3];
-        r.supply.droop_bar = 0.2;
-        r.supply.pump_max_lpm = 60.0;
-        r.fluid.air_fraction = 0.01;
-        r.fluid.bulk_modulus_bar = 16000.0;
-        r.cylinder.hose_fraction = 0.0;
-    }
     let only: Option<&str> = a.get(4).map(|s| s.as_str());
     for (name, edit) in variants {
         if only.is_some_and(|o| !name.contains(o)) {
@@ -195,4 +121,67 @@ fn main() {
         edit(&mut rig);
         println!("{name:32} healthy  {}", run(&rig, none, &p));
     }
+}
+
+fn quiet_sensors(r: &mut RigSpec) {
+    for c in r.sensors.pressure.iter_mut() {
+        c.white_sigma = 0.02;
+        c.coloured_sigma = 0.0;
+        c.lag_s = 0.0;
+        c.ripple_pickup = 0.0;
+        c.offset = 0.0;
+    }
+    r.sensors.position.white_sigma = 1e-5;
+    r.sensors.position.coloured_sigma = 0.0;
+    r.sensors.position.lag_s = 0.0;
+    r.sensors.position.offset = 0.0;
+    r.sensors.valve_command_offset = 0.0;
+}
+
+fn nominal_valve(r: &mut RigSpec) {
+    r.valve.flow_gain_lpm_sqrt_bar = [7.9025, 7.9025, 7.4187, 7.4187];
+    r.valve.overlap = [0.015; 4];
+    r.valve.null_bias = 0.0;
+}
+
+fn ideal_supply(r: &mut RigSpec) {
+    r.supply.ripple_bar = [0.0; 3];
+    r.supply.droop_bar = 0.2;
+    r.supply.pump_max_lpm = 60.0;
+}
+
+fn nominal_fluid(r: &mut RigSpec) {
+    r.fluid.air_fraction = 0.01;
+    r.fluid.bulk_modulus_bar = 16000.0;
+    r.cylinder.hose_fraction = 0.0;
+}
+
+fn nominal_load(r: &mut RigSpec) {
+    r.load.masses_kg = [6.12844, 15.36792, 13.62235, 87.92456];
+    r.load.inertias_kg_m2 = [0.070_673, 1.321_969, 0.879_096, 53.414_170];
+    r.load.payload_kg = 0.0;
+    r.load.force_offset_n = 0.0;
+}
+
+fn nominal_friction(r: &mut RigSpec) {
+    r.friction.coulomb_n = 480.0;
+    r.friction.breakaway_n = 990.0;
+    r.friction.viscous_ns_per_m = 5000.0;
+    r.friction.viscous_viscosity_exponent = 0.0;
+}
+
+fn nominal_cylinder(r: &mut RigSpec) {
+    r.cylinder.piston_area_m2 = 3.117e-3;
+    r.cylinder.rod_area_m2 = 2.41e-3;
+    r.cylinder.dead_volume_piston_m3 = 2e-4;
+    r.cylinder.dead_volume_rod_m3 = 2e-4;
+}
+
+/// Sensors, land leakage, valve, supply and fluid as the monitor assumes.
+fn everything_but_mechanics(r: &mut RigSpec) {
+    quiet_sensors(r);
+    r.valve.land_leak_lpm_per_bar = [3.3e-3; 4];
+    nominal_valve(r);
+    ideal_supply(r);
+    nominal_fluid(r);
 }
