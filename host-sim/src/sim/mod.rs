@@ -1,9 +1,9 @@
 //! The rig simulator: physics, sensors, scenarios.
 
-/// Pa per bar (the monitor's unit conversions; the physics is the rig's own).
-const BAR: f64 = monitor::model::BAR;
+/// Pa per bar.
+const BAR: f64 = 1.0e5;
 /// m³/s per l/min.
-const LPM: f64 = 1.0 / monitor::model::LPM_PER_M3S;
+const LPM: f64 = 1.0 / 60_000.0;
 
 pub mod rig;
 pub mod scenario;

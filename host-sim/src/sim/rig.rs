@@ -16,12 +16,101 @@
 //! - supply pressure droop and ripple, return-line back pressure.
 //!
 //! Sensors (lag, noise, offsets, quantisation) are in `sensors.rs`.
+//!
+//! The crane's load and the oil (bulk modulus with air, viscosity) come
+//! from the independent `plant` crate's models, not the monitor's: the
+//! parameters are read from a `monitor::Params` (a data set), but no
+//! model code of the monitor computes this rig.
 
-use monitor::fluid::bulk_modulus_exact;
-use monitor::load::load_terms_exact;
 use monitor::Params;
+use plant::{FluidSpec, LoadSpec};
 
 use super::{BAR, LPM};
+
+/// Points of the tabulated load over the stroke.
+const LOAD_POINTS: usize = 721;
+
+/// The crane's load over the stroke, from `plant`'s virtual-work
+/// derivation, tabulated (its trigonometry per RK4 stage would dominate).
+#[derive(Clone, Debug)]
+struct LoadCurve {
+    stroke_m: f64,
+    /// Gravity load G(x), N (positive opposes extension), with the offset.
+    gravity_n: Vec<f64>,
+    /// Effective moving mass M(x), kg.
+    mass_kg: Vec<f64>,
+    /// ½·M'(x), kg/m.
+    c2_kg_m: Vec<f64>,
+}
+
+impl LoadCurve {
+    fn new(p: &Params) -> Self {
+        let l = &p.load;
+        let spec = |mass_scale: f64| LoadSpec {
+            theta1_fit_deg: l.theta1_fit_deg,
+            theta2_fit_deg: l.theta2_fit_deg,
+            base_to_r21_y_m: l.base_to_r21_y_m,
+            r21_to_r1_m: l.r21_to_r1_m,
+            r21_to_r3_m: l.r21_to_r3_m,
+            r21_to_cg21_m: l.r21_to_cg21_m,
+            r1_to_cg1_m: l.r1_to_cg1_m,
+            r1_to_r22_m: l.r1_to_r22_m,
+            r22_to_cg22_m: l.r22_to_cg22_m,
+            r3_to_cg3_m: l.r3_to_cg3_m,
+            masses_kg: l.masses_kg.map(|m| m * mass_scale),
+            inertias_kg_m2: l.inertias_kg_m2.map(|i| i * mass_scale),
+            payload_kg: 0.0,
+            force_offset_n: l.force_offset_n,
+            gravity_m_s2: l.gravity_m_s2,
+            ..LoadSpec::nominal()
+        };
+        let (weight, inertia) = (spec(l.gravity_scale), spec(l.inertia_scale));
+        let stroke_m = p.cylinder.stroke_m;
+        let x = |k: usize| stroke_m * k as f64 / (LOAD_POINTS - 1) as f64;
+        let h = 1e-5;
+        Self {
+            stroke_m,
+            gravity_n: (0..LOAD_POINTS)
+                .map(|k| weight.gravity_force_n(x(k)))
+                .collect(),
+            mass_kg: (0..LOAD_POINTS)
+                .map(|k| inertia.effective_mass_kg(x(k)))
+                .collect(),
+            c2_kg_m: (0..LOAD_POINTS)
+                .map(|k| {
+                    let m = |x: f64| inertia.effective_mass_kg(x);
+                    0.25 * (m(x(k) + h) - m(x(k) - h)) / h
+                })
+                .collect(),
+        }
+    }
+
+    /// (G, M, ½M') at `x`, linearly interpolated, clamped to the stroke.
+    fn at(&self, x: f64) -> (f64, f64, f64) {
+        let f = (x / self.stroke_m).clamp(0.0, 1.0) * (LOAD_POINTS - 1) as f64;
+        let k = (f as usize).min(LOAD_POINTS - 2);
+        let w = f - k as f64;
+        let lerp = |v: &[f64]| v[k] + w * (v[k + 1] - v[k]);
+        (
+            lerp(&self.gravity_n),
+            lerp(&self.mass_kg),
+            lerp(&self.c2_kg_m),
+        )
+    }
+}
+
+/// The oil of `p` in `plant`'s terms: its bulk modulus with air and its
+/// viscosity law through the same 25 → 40 °C ratio.
+fn oil(p: &Params) -> FluidSpec {
+    let f = &p.fluid;
+    FluidSpec {
+        viscosity_40c_cst: 46.0,
+        viscosity_ratio_25_40: (f.viscosity_temperature_coeff_per_c * 15.0).exp(),
+        bulk_modulus_bar: f.bulk_modulus_bar,
+        air_fraction: f.air_fraction,
+        polytropic_exponent: f.adiabatic_index,
+    }
+}
 
 /// How a leak's flow depends on its pressure difference.
 #[derive(
@@ -67,6 +156,10 @@ pub struct RigPhysics {
     pub external_law: LeakLaw,
     /// Leaks start at this time, s (0: present from the start).
     pub leak_onset_s: f64,
+    /// The load over the stroke (from `plant`).
+    load: LoadCurve,
+    /// The oil (from `plant`).
+    oil: FluidSpec,
 }
 
 /// Physical state.
@@ -103,6 +196,8 @@ impl RigPhysics {
     /// A rig with the given plant and no leaks.
     pub fn new(plant: Params, supply_bar: f64, temp_c: f64) -> Self {
         Self {
+            load: LoadCurve::new(&plant),
+            oil: oil(&plant),
             plant,
             edge_gain: [1.0; 4],
             edge_leak: [1.0; 4],
@@ -122,7 +217,8 @@ impl RigPhysics {
 
     /// ν(T_ref)/ν(T): laminar flows scale with it.
     fn laminar_factor(&self) -> f64 {
-        monitor::fluid::laminar_flow_factor(&self.plant.fluid, self.temp_c)
+        let t_ref = self.plant.fluid.reference_temperature_c;
+        self.oil.viscosity_cst(t_ref) / self.oil.viscosity_cst(self.temp_c)
     }
 
     /// Leak flow through a leak of coefficient `k`, law `law`, at `dp` Pa.
@@ -207,14 +303,14 @@ impl RigPhysics {
         let vol_b = c.dead_volume_rod_m3 + c.rod_side_area_m2 * (c.stroke_m - xc);
         // Warm oil is a little softer (≈ 0.4 %/°C).
         let soft = (1.0 - 0.004 * (self.temp_c - 25.0)).clamp(0.6, 1.2);
-        let beta3 = bulk_modulus_exact(&p.fluid, s.p3) * soft;
-        let beta4 = bulk_modulus_exact(&p.fluid, s.p4) * soft;
+        let beta3 = self.oil.bulk_modulus_bar(s.p3 / BAR) * BAR * soft;
+        let beta4 = self.oil.bulk_modulus_bar(s.p4 / BAR) * BAR * soft;
         let dp3 = beta3 / vol_a * (q_pa - q_at + leak_a - seal - q_int - c.piston_area_m2 * s.v);
         let dp4 = beta4 / vol_b
             * (q_pb - q_bt + leak_b + seal + q_int - q_ext - ext_base + c.rod_side_area_m2 * s.v);
 
         // Mechanics with Karnopp stick–slip friction and end stops.
-        let load = load_terms_exact(&p.load, xc);
+        let (gravity_n, mass_kg, c2_kg_m) = self.load.at(xc);
         let f_hyd = s.p3 * c.piston_area_m2 - s.p4 * c.rod_side_area_m2;
         let mut f_stop = 0.0;
         if s.x < 0.0 {
@@ -222,7 +318,7 @@ impl RigPhysics {
         } else if s.x > c.stroke_m {
             f_stop = -2e8 * (s.x - c.stroke_m) - 2e5 * s.v.max(0.0);
         }
-        let f_drive = f_hyd - load.gravity_n - load.c2_kg_m * s.v * s.v + f_stop;
+        let f_drive = f_hyd - gravity_n - c2_kg_m * s.v * s.v + f_stop;
         let fr = &p.friction;
         // Viscous friction follows viscosity weakly.
         let b_visc = fr.viscous_ns_per_m / lam.powf(0.3);
@@ -241,7 +337,7 @@ impl RigPhysics {
                 + (fr.breakaway_n - fr.coulomb_n) * (-fr.stribeck_s_per_m * s.v.abs()).exp())
                 * dir
                 + b_visc * s.v;
-            (f_drive - f_fric) / load.mass_kg
+            (f_drive - f_fric) / mass_kg
         };
 
         // Spool: second-order servo loop with travel limits.
@@ -303,10 +399,10 @@ impl RigPhysics {
     /// the force balance the valve leakage would settle to.
     pub fn rest_state(&self, x: f64) -> RigState {
         let c = &self.plant.cylinder;
-        let load = load_terms_exact(&self.plant.load, x);
+        let (gravity_n, _, _) = self.load.at(x);
         // Rod side near the leakage balance, piston side carries the load.
         let p4 = (0.5 * self.supply_bar * BAR).min(0.45 * self.supply_bar * BAR);
-        let p3 = (load.gravity_n + p4 * c.rod_side_area_m2) / c.piston_area_m2;
+        let p3 = (gravity_n + p4 * c.rod_side_area_m2) / c.piston_area_m2;
         RigState {
             x,
             v: 0.0,
