@@ -8,7 +8,7 @@ use crate::decision::Decision;
 use crate::fluid::laminar_flow_factor;
 use crate::hypothesis::Hypothesis;
 use crate::model::{Inputs, Plant, Step, BAR, GAIN_REF, LAMINAR_REF, NX, P_REF, X_REF};
-use crate::params::{ParamError, Params};
+use crate::params::{operating_region, ParamError, Params};
 use crate::quiet::Quietness;
 use crate::real::Real;
 use crate::sample::{Channel, Sample};
@@ -124,10 +124,7 @@ impl<T: Real> Monitor<T> {
                 T::c(-10.0 * leakage.external_lpm_per_bar.max(0.0)),
             ],
             stroke: T::c(params.cylinder.stroke_m / X_REF),
-            hold_band: (
-                (params.valve.null_offset - params.valve.dead_zone) as f32,
-                (params.valve.null_offset + params.valve.dead_zone) as f32,
-            ),
+            hold_band: params.hold_band(),
         };
         let period = f.sample_period_s;
         Ok(Self {
@@ -309,14 +306,7 @@ impl<T: Real> Monitor<T> {
         if warming {
             flags |= health::WARMING_UP;
         }
-        let (lo, hi) = self.cfg.hold_band;
-        let region = if c.u_valve < lo {
-            0
-        } else if c.u_valve > hi {
-            2
-        } else {
-            1
-        };
+        let region = operating_region(c.u_valve, self.cfg.hold_band);
         flags |= self.decision.update(
             &ok,
             T::c(dt),

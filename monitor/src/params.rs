@@ -368,7 +368,29 @@ pub struct Params {
     pub alarm: AlarmConfig,
 }
 
+/// Operating region of a valve command for `[baseline]`: 0 retracting
+/// (u < null − dead zone), 1 holding, 2 extending (u > null + dead zone).
+/// `hold_band` is [`Params::hold_band`].
+pub fn operating_region(u: f32, hold_band: (f32, f32)) -> usize {
+    if u < hold_band.0 {
+        0
+    } else if u > hold_band.1 {
+        2
+    } else {
+        1
+    }
+}
+
 impl Params {
+    /// The valve commands of the holding region: null ± dead zone.
+    pub fn hold_band(&self) -> (f32, f32) {
+        let v = &self.valve;
+        (
+            (v.null_offset - v.dead_zone) as f32,
+            (v.null_offset + v.dead_zone) as f32,
+        )
+    }
+
     /// The reference thesis rig (ch. 5–6).
     pub const NOMINAL: Params = Params {
         cylinder: Cylinder::NOMINAL,

@@ -3,7 +3,7 @@
 
 use super::CalibrationError;
 use monitor::bank::NB;
-use monitor::model::{BAR, P3, P4, P_REF};
+use monitor::params::operating_region;
 use monitor::status::health;
 use monitor::{Event, Monitor, Params, Sample, Verdict};
 
@@ -26,12 +26,6 @@ pub struct Run {
     /// Largest |reported leak| (evidence-window average), [internal,
     /// external], l/min.
     pub leak_max_lpm: [f64; 2],
-    /// Largest |reported leak| with the per-region `[baseline]` subtracted
-    /// from the `both` filter's coefficients, computed here as the
-    /// monitor's decision layer does (evidence-window average of
-    /// (θ − baseline)·|Δp|/10 bar): what a monitor that subtracts the
-    /// baseline reports; equal to `leak_max_lpm` for a zero baseline.
-    pub corrected_leak_max_lpm: [f64; 2],
     /// Largest |detection reading| (0.25 s average), l/min.
     pub detect_max_lpm: [f64; 2],
     /// Fraction of the counted time with evidence weight > 0.5.
@@ -64,18 +58,6 @@ impl Run {
     }
 }
 
-/// Region of a command: 0 retracting, 1 holding, 2 extending.
-fn region(u: f32, p: &Params) -> usize {
-    let d = u as f64 - p.valve.null_offset;
-    if d < -p.valve.dead_zone {
-        0
-    } else if d > p.valve.dead_zone {
-        2
-    } else {
-        1
-    }
-}
-
 /// Run `Monitor<f64>` with `p` over the whole of `samples`.
 pub fn run(samples: &[Sample], p: &Params) -> Result<Run, CalibrationError> {
     run_pieces(&[samples], p, (f64::NEG_INFINITY, f64::INFINITY))
@@ -93,8 +75,7 @@ pub fn run_pieces(
     let mut r = Run::default();
     let (mut healthy, mut leading, mut evident_s) = (0.0, 0.0, 0.0);
     let mut last_t: Option<f64> = None;
-    let mut corrected = [0.0f64; 2];
-    let b = &p.baseline;
+    let band = p.hold_band();
     for s in pieces.iter().flat_map(|piece| piece.iter()) {
         let st = m.step(s);
         let dt = last_t.map_or(0.0, |t| (s.t_s - t).clamp(0.0, 0.01));
@@ -136,25 +117,10 @@ pub fn run_pieces(
                 r.detect_max_lpm[k] = r.detect_max_lpm[k].max((d as f64).abs());
             }
         }
-        if let (Some(bank), Some(u), Some(pt)) = (m.bank(), s.u_valve, s.p_tank_bar) {
+        if let (Some(bank), Some(u)) = (m.bank(), s.u_valve) {
             // The leak states are in l/min at 10 bar (LEAK_UNIT).
             let x = &bank.both.ekf.x;
-            let reg = region(u, p);
-            let per_10bar = P_REF / 1.0e6;
-            let dp = [
-                (x[P3] - x[P4]).abs() * per_10bar,
-                (x[P4] - pt as f64 * BAR / P_REF).abs() * per_10bar,
-            ];
-            let theta = [
-                x[NB] - b.internal_lpm_per_10bar[reg],
-                x[NB + 1] - b.external_lpm_per_10bar[reg],
-            ];
-            let a = (dt / p.filter.evidence_window_s).min(1.0);
-            for k in 0..2 {
-                corrected[k] += a * (theta[k] * dp[k] - corrected[k]);
-                r.corrected_leak_max_lpm[k] = r.corrected_leak_max_lpm[k].max(corrected[k].abs());
-            }
-            let acc = &mut r.region_sums[region(u, p)];
+            let acc = &mut r.region_sums[operating_region(u, band)];
             acc[0] += w * dt * x[NB];
             acc[1] += w * dt * x[NB + 1];
             acc[2] += w * dt;

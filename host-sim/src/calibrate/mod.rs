@@ -976,8 +976,8 @@ impl Calibration {
             );
             let _ = writeln!(
                 s,
-                "  largest |leak| reading: internal {:.3} l/min, external {:.3} l/min (alarm level {alarm} l/min); with the per-region baseline subtracted: {:.3} / {:.3} l/min",
-                v.leak_max_lpm[0], v.leak_max_lpm[1], v.corrected_leak_max_lpm[0], v.corrected_leak_max_lpm[1]
+                "  largest |leak| reading (the monitor's own, per-region baseline subtracted): internal {:.3} l/min, external {:.3} l/min (alarm level {alarm} l/min)",
+                v.leak_max_lpm[0], v.leak_max_lpm[1]
             );
             let _ = writeln!(
                 s,
