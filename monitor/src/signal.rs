@@ -226,6 +226,12 @@ impl SampleChecker {
         (spike.x_m, out)
     }
 
+    /// Forget the sequence of chamber readings (a fault or a gap).
+    pub fn break_pressure_sequence(&mut self) {
+        self.noise[1].break_sequence();
+        self.noise[2].break_sequence();
+    }
+
     /// Take the chamber readings of a sample into the noise estimates.
     pub fn observe_pressures(&mut self, p_piston_bar: f32, p_rod_bar: f32) {
         self.noise[1].update(p_piston_bar);
@@ -239,14 +245,6 @@ struct Plausibility {
     faulted: u8,
     suspect: u8,
     outlier: bool,
-}
-
-impl SampleChecker {
-    /// Forget the sequence of chamber readings (a fault or a gap).
-    pub fn break_pressure_sequence(&mut self) {
-        self.noise[1].break_sequence();
-        self.noise[2].break_sequence();
-    }
 }
 
 #[cfg(test)]
