@@ -6,7 +6,7 @@
 //!
 //! `cargo run -p host-sim --example can_vectors`
 
-use monitor::alarm::{AlarmState, LeakKind};
+use monitor::device::alarm::{AlarmState, LeakKind};
 use monitor::protocol::{
     AlarmFrame, Command, CommandFrame, DetailFrame, Encoder, HeartbeatFrame, Message, ResetCause,
     StatusFrame,

@@ -137,7 +137,7 @@ fn a_minute_of_normal_work_is_accepted_and_reads_healthy_on_another_recording() 
     // on purpose.
     for x in [0.05, 0.09, 0.13] {
         let g = |l: &monitor::params::Pantograph| {
-            monitor::load::load_terms_exact(l, x).gravity_n + l.force_offset_n
+            monitor::physics::load::load_terms_exact(l, x).gravity_n + l.force_offset_n
         };
         let (fit, want) = (g(&p.load), g(&truth.load));
         assert!(

@@ -2,7 +2,7 @@
 //! encoder: decoded values, flagged CRC errors and counter jumps, strict
 //! exit status, malformed lines.
 
-use monitor::alarm::{AlarmState, LeakKind};
+use monitor::device::alarm::{AlarmState, LeakKind};
 use monitor::protocol::{AlarmFrame, CanFrame, Encoder, Message, StatusFrame};
 use monitor::Verdict;
 use std::path::Path;

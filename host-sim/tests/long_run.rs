@@ -4,13 +4,8 @@
 
 use host_sim::sim::{Profile, Rig, Scenario, Simulation};
 use monitor::{Monitor, Params, Verdict};
-use nalgebra::DMatrix;
 
-fn min_eig<const N: usize>(p: &nalgebra::SMatrix<f32, N, N>) -> f64 {
-    assert!(p.iter().all(|v| v.is_finite()), "non-finite covariance");
-    let d = DMatrix::from_fn(N, N, |i, j| p[(i, j)] as f64);
-    d.symmetric_eigen().eigenvalues.min()
-}
+mod common;
 
 #[test]
 #[ignore = "one simulated hour: run with --release -- --ignored"]
@@ -38,13 +33,7 @@ fn one_hour_healthy_stays_finite_psd_and_silent() {
         }
         n += 1;
         if n % 60_000 == 0 {
-            let b = m.bank().unwrap();
-            for e in [
-                min_eig(&b.healthy.ekf.p),
-                min_eig(&b.internal.ekf.p),
-                min_eig(&b.external.ekf.p),
-                min_eig(&b.both.ekf.p),
-            ] {
+            for e in common::min_covariance_eigenvalues(&m).unwrap() {
                 worst = worst.min(e);
                 assert!(e > -1e-9, "covariance not PSD at t = {}: {e}", s.t_s);
             }

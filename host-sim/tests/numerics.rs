@@ -154,57 +154,10 @@ fn covariances_stay_symmetric_positive_definite() {
     for (k, x) in s.iter().enumerate() {
         m.step(x);
         if k % 5000 == 4999 {
-            common_psd::check(&m);
-        }
-    }
-}
-
-mod common_psd {
-    use monitor::Monitor;
-    use nalgebra::DMatrix;
-
-    fn min_eig<const N: usize>(p: &nalgebra::SMatrix<f32, N, N>) -> f64 {
-        for i in 0..N {
-            for j in 0..N {
-                assert_eq!(p[(i, j)], p[(j, i)], "P not symmetric");
-                assert!(p[(i, j)].is_finite());
+            let mins = common::min_covariance_eigenvalues(&m).expect("filters running");
+            for (i, e) in mins.iter().enumerate() {
+                assert!(*e > -1e-9, "filter {i}: min eigenvalue {e}");
             }
         }
-        let d = DMatrix::from_fn(N, N, |i, j| p[(i, j)] as f64);
-        d.symmetric_eigen().eigenvalues.min()
     }
-
-    /// Every filter's covariance: finite, symmetric, PSD (eigenvalues above
-    /// −1e-9 relative to the largest diagonal entry).
-    pub fn check(m: &Monitor<f32>) {
-        let b = m.bank().expect("filters running");
-        let mins = [
-            min_eig(&b.healthy.ekf.p),
-            min_eig(&b.internal.ekf.p),
-            min_eig(&b.external.ekf.p),
-            min_eig(&b.both.ekf.p),
-        ];
-        for (i, e) in mins.iter().enumerate() {
-            assert!(*e > -1e-9, "filter {i}: min eigenvalue {e}");
-        }
-    }
-}
-
-#[test]
-fn a_failed_optional_temperature_sensor_is_reported_but_keeps_the_verdict() {
-    let mut s = samples(0.0, 0.0, 37);
-    for x in &mut s {
-        x.temp_oil_c = Some(30.0);
-    }
-    for x in &mut s[20_000..20_100] {
-        x.temp_oil_c = Some(500.0); // implausible
-    }
-    let st = replay::<f32>(&s);
-    assert!(st[20_000]
-        .events
-        .contains(&Event::SensorFault(monitor::Channel::TempOil)));
-    assert_ne!(st[20_000].faulted_channels, 0);
-    assert!(st[20_000..20_100]
-        .iter()
-        .all(|x| x.verdict == Verdict::Healthy));
 }

@@ -28,29 +28,6 @@ impl Hypothesis {
         matches!(self, Self::External | Self::Both)
     }
 
-    /// State index of the internal leak coefficient, if any.
-    pub const fn internal_index(self) -> Option<usize> {
-        if self.has_internal() {
-            Some(crate::bank::NB)
-        } else {
-            None
-        }
-    }
-
-    /// State index of the external leak coefficient, if any.
-    pub const fn external_index(self) -> Option<usize> {
-        match self {
-            Self::External => Some(crate::bank::NB),
-            Self::Both => Some(crate::bank::NB + 1),
-            _ => None,
-        }
-    }
-
-    /// Number of filter states: plant, valve nuisance, leaks.
-    pub const fn states(self) -> usize {
-        crate::bank::NB + self.has_internal() as usize + self.has_external() as usize
-    }
-
     /// Lower-case name, as in the replay JSON.
     pub const fn name(self) -> &'static str {
         match self {

@@ -5,16 +5,17 @@
 //! engineering units) and returns a [`Status`]. The same code runs on the
 //! STM32 (f32) and in `host-sim` on a desktop (f32, or f64 as a reference).
 //!
-//! Layout: `params` (installation parameters) → `load`, `fluid`, `valve`
-//! (physics pieces) → `model` (the six-state plant and its Jacobian) →
-//! `ekf` (filter core) → `bank` (one filter per leak hypothesis) →
-//! `decision` (evidence, verdict, alarm latching) → `monitor` (the entry
-//! point, with `signal` checking the inputs).
-//!
-//! For the device: `signal::frontend` (ADC codes → engineering units,
-//! NAMUR NE43), `alarm` (the fail-safe relay and alarm state machine),
-//! `protocol` (the CAN frames, E2E protection, frame scheduling),
-//! `deadline` and `supervisor` (the 1 ms deadline and the watchdog).
+//! Layout, in the order data flows:
+//! - `signal`: input conditioning (NAMUR NE43, frozen readings, spikes,
+//!   noise estimate; `signal::frontend` turns ADC codes into units);
+//! - `physics`: load, oil, valve and friction pieces in SI units;
+//! - `estimation` (internal): the six-state model, the EKF core and the
+//!   bank of one filter per leak hypothesis;
+//! - `decision`: evidence, verdict and alarm latching;
+//! - `monitor`: the entry point tying them together, with `params`,
+//!   `sample` and `status` as its data;
+//! - `device` and `protocol`: the fail-safe relay, the 1 ms deadline, the
+//!   watchdog supervisor and the CAN frames.
 #![no_std]
 #![deny(missing_docs)]
 // `!(x > 0.0)` is deliberate throughout: it is true for NaN, which must be
@@ -24,31 +25,23 @@
 // the same index; iterator chains over three arrays read worse.
 #![allow(clippy::needless_range_loop)]
 
-pub mod alarm;
-pub mod bank;
-pub mod consistency;
-pub mod deadline;
-pub mod decision;
-pub mod ekf;
-pub mod fluid;
-pub mod hypothesis;
-pub mod load;
-pub mod model;
-pub mod monitor;
+pub(crate) mod decision;
+pub mod device;
+pub(crate) mod estimation;
+mod hypothesis;
+mod monitor;
 pub mod params;
+pub mod physics;
 pub mod protocol;
-pub mod quiet;
-pub mod real;
-pub mod sample;
+mod real;
+mod sample;
 pub mod signal;
 pub mod status;
-pub mod supervisor;
 #[cfg(test)]
 mod testutil;
-pub mod valve;
 
 pub use hypothesis::Hypothesis;
-pub use monitor::Monitor;
+pub use monitor::{FilterState, Monitor};
 pub use params::Params;
 pub use real::Real;
 pub use sample::{Channel, Sample};

@@ -2,19 +2,22 @@
 //! status. Deterministic: the same samples give the same statuses, bit for
 //! bit, on any IEEE-754 machine (see `real.rs`).
 
-use crate::bank::{Bank, BankOutput, Measurement, ProcessNoise, StepContext, NB, NZ};
-use crate::consistency::NoiseMatch;
 use crate::decision::Decision;
-use crate::fluid::laminar_flow_factor;
+use crate::estimation::bank::{
+    external_index, internal_index, Bank, BankOutput, HypothesisFilter, Measurement, ProcessNoise,
+    StepContext, NB, NZ,
+};
+use crate::estimation::consistency::NoiseMatch;
+use crate::estimation::model::{Inputs, Plant, Step, BAR, GAIN_REF, LAMINAR_REF, NX, P_REF, X_REF};
+use crate::estimation::quiet::Quietness;
 use crate::hypothesis::Hypothesis;
-use crate::model::{Inputs, Plant, Step, BAR, GAIN_REF, LAMINAR_REF, NX, P_REF, X_REF};
 use crate::params::{operating_region, ParamError, Params};
-use crate::quiet::Quietness;
+use crate::physics::fluid::laminar_flow_factor;
+use crate::physics::valve::SpoolStep;
 use crate::real::Real;
 use crate::sample::{Channel, Sample};
 use crate::signal::{Conditioned, SampleChecker};
 use crate::status::{health, Event, Events, Status, Verdict};
-use crate::valve::SpoolStep;
 
 /// A step longer than this many nominal periods is a data gap.
 pub const GAP_PERIODS: f64 = 5.0;
@@ -399,9 +402,44 @@ impl<T: Real> Monitor<T> {
         }
     }
 
-    /// The filter bank, if running (for diagnostics and tests).
-    pub fn bank(&self) -> Option<&Bank<T>> {
-        self.bank.as_ref()
+    /// Every filter's state, in bank order (healthy, internal, external,
+    /// both), for diagnostics, calibration and tests; `None` while the bank
+    /// is not running.
+    pub fn filter_states(&self) -> Option<[FilterState<'_, T>; 4]> {
+        let b = self.bank.as_ref()?;
+        Some([
+            FilterState::of(&b.healthy),
+            FilterState::of(&b.internal),
+            FilterState::of(&b.external),
+            FilterState::of(&b.both),
+        ])
+    }
+}
+
+/// One filter's state, read-only.
+#[derive(Clone, Copy, Debug)]
+pub struct FilterState<'a, T> {
+    /// The leak hypothesis this filter runs.
+    pub hypothesis: Hypothesis,
+    /// State estimate (scaled units; leak states in l/min at 10 bar).
+    pub x: &'a [T],
+    /// Covariance, `x.len()`² entries, column-major.
+    pub p: &'a [T],
+    /// The internal leak state, if the hypothesis has one (l/min at 10 bar).
+    pub leak_internal: Option<T>,
+    /// The external leak state, if the hypothesis has one (l/min at 10 bar).
+    pub leak_external: Option<T>,
+}
+
+impl<'a, T: Real> FilterState<'a, T> {
+    fn of<const N: usize>(f: &'a HypothesisFilter<T, N>) -> Self {
+        Self {
+            hypothesis: f.hypothesis,
+            x: f.ekf.x.as_slice(),
+            p: f.ekf.p.as_slice(),
+            leak_internal: internal_index(f.hypothesis).map(|i| f.ekf.x[i]),
+            leak_external: external_index(f.hypothesis).map(|i| f.ekf.x[i]),
+        }
     }
 }
 

@@ -6,8 +6,8 @@
 use core::sync::atomic::Ordering;
 
 use embassy_time::Instant;
-use monitor::alarm::AlarmLogic;
-use monitor::deadline::{DeadlineMonitor, SampleClock};
+use monitor::device::alarm::AlarmLogic;
+use monitor::device::deadline::{DeadlineMonitor, SampleClock};
 use monitor::protocol::schedule::FrameScheduler;
 use monitor::protocol::{AlarmFrame, Command, DetailFrame, HeartbeatFrame, Message, StatusFrame};
 use monitor::signal::frontend::{average_scans, Frontend, FrontendConfig};

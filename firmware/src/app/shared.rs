@@ -9,8 +9,8 @@ use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::blocking_mutex::Mutex;
 use embassy_sync::channel::Channel;
 use embassy_sync::signal::Signal;
-use monitor::alarm::AlarmOutput;
-use monitor::deadline::LoadReport;
+use monitor::device::alarm::AlarmOutput;
+use monitor::device::deadline::LoadReport;
 use monitor::protocol::outbox::Outbox;
 use monitor::protocol::{AlarmFrame, Command, Message};
 

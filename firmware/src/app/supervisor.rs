@@ -1,5 +1,5 @@
 //! The supervisor task (low priority, every 10 ms): feeds the watchdog
-//! only while the estimator keeps its deadline (`monitor::supervisor`),
+//! only while the estimator keeps its deadline (`monitor::device::supervisor`),
 //! de-energises the relay for good when the estimator stalls (the
 //! watchdog then resets the board), drives the status LED, and writes the
 //! log: the estimator's events as they come, a summary every second.
@@ -7,9 +7,9 @@
 use core::sync::atomic::Ordering;
 
 use embassy_time::{Duration, Instant, Ticker};
-use monitor::alarm::AlarmState;
+use monitor::device::alarm::AlarmState;
+use monitor::device::supervisor::{Supervision, Supervisor, SupervisorConfig};
 use monitor::protocol::Message;
-use monitor::supervisor::{Supervision, Supervisor, SupervisorConfig};
 
 use super::shared::{LogEvent, Shared};
 use crate::board::{RelayOutput, StatusLed, Watchdog};

@@ -2,7 +2,6 @@
 //! fit, the healthy baseline and the held-out validation need.
 
 use super::CalibrationError;
-use monitor::bank::NB;
 use monitor::params::operating_region;
 use monitor::status::health;
 use monitor::{Event, Monitor, Params, Sample, Verdict};
@@ -117,12 +116,12 @@ pub fn run_pieces(
                 r.detect_max_lpm[k] = r.detect_max_lpm[k].max((d as f64).abs());
             }
         }
-        if let (Some(bank), Some(u)) = (m.bank(), s.u_valve) {
+        if let (Some([.., both]), Some(u)) = (m.filter_states(), s.u_valve) {
             // The leak states are in l/min at 10 bar (LEAK_UNIT).
-            let x = &bank.both.ekf.x;
+            let leak = |v: Option<f64>| v.unwrap_or(0.0);
             let acc = &mut r.region_sums[operating_region(u, band)];
-            acc[0] += w * dt * x[NB];
-            acc[1] += w * dt * x[NB + 1];
+            acc[0] += w * dt * leak(both.leak_internal);
+            acc[1] += w * dt * leak(both.leak_external);
             acc[2] += w * dt;
         }
     }

@@ -2,9 +2,10 @@
 //! the force balance, each on quasi-steady moves.
 
 use super::Fit;
-use monitor::load::load_terms_exact;
-use monitor::model::{stribeck_decay, BAR, LPM_PER_M3S};
-use monitor::valve::orifice;
+use monitor::physics::friction::stribeck_decay;
+use monitor::physics::load::load_terms_exact;
+use monitor::physics::units::{BAR, LPM_PER_M3S};
+use monitor::physics::valve::orifice;
 use monitor::{Params, Sample};
 
 /// Samples each side of the centre for smoothing/differentiation.

@@ -67,7 +67,7 @@ pub use check::{Run, REGIONS};
 pub use fit::{Motion, Quality};
 pub use noise::ChannelNoise;
 
-use monitor::model::{LEAK_UNIT, LPM_PER_M3S};
+use monitor::physics::units::{LEAK_UNIT, LPM_PER_M3S};
 use monitor::{Params, Sample};
 
 /// Minimum recording length, s: the held-out third must hold at least 8 s

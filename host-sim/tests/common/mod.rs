@@ -55,3 +55,19 @@ pub fn scenario(supply: f64, internal: f64, external: f64, onset: f64, seed: u64
         ..Scenario::default()
     }
 }
+
+/// Every running filter's smallest covariance eigenvalue, after checking
+/// each covariance is finite and exactly symmetric; `None` while the bank
+/// is not running.
+pub fn min_covariance_eigenvalues(m: &Monitor<f32>) -> Option<[f64; 4]> {
+    let filters = m.filter_states()?;
+    Some(filters.map(|f| {
+        let n = f.x.len();
+        assert!(f.p.iter().all(|v| v.is_finite()), "non-finite covariance");
+        let d = nalgebra::DMatrix::from_fn(n, n, |i, j| {
+            assert_eq!(f.p[i + n * j], f.p[j + n * i], "P not symmetric");
+            f.p[i + n * j] as f64
+        });
+        d.symmetric_eigen().eigenvalues.min()
+    }))
+}

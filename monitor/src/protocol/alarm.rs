@@ -14,7 +14,7 @@
 use super::bytes::{get_u32, put_u32};
 use super::signal::SignalList;
 use super::{FieldError, Signals};
-use crate::alarm::{AlarmLogic, AlarmState, LeakKind};
+use crate::device::alarm::{AlarmLogic, AlarmState, LeakKind};
 
 /// The alarm frame.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

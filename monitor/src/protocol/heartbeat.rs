@@ -16,7 +16,7 @@
 use super::bytes::{get_u16, put_u16};
 use super::signal::SignalList;
 use super::{FieldError, Signals};
-use crate::deadline::LoadReport;
+use crate::device::deadline::LoadReport;
 
 /// Why the board last reset (from the reset flags at boot).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]

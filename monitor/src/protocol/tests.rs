@@ -2,7 +2,7 @@
 //! counters are checked, the monitor's floats are quantised as documented.
 
 use super::*;
-use crate::alarm::{AlarmState, LeakKind};
+use crate::device::alarm::{AlarmState, LeakKind};
 use crate::hypothesis::Hypothesis;
 use crate::status::{health, Verdict};
 use crate::testutil;

@@ -3,10 +3,8 @@
 //! to `Sample` or `Status` is a compile error here until it is hashed.
 
 use crate::fnv::Fnv64;
-use monitor::bank::Bank;
-use monitor::ekf::Ekf;
 use monitor::status::Evidence;
-use monitor::{Channel, Event, Hypothesis, Monitor, Sample, Status, Verdict};
+use monitor::{Channel, Event, FilterState, Hypothesis, Monitor, Sample, Status, Verdict};
 
 fn opt_f32(h: &mut Fnv64, v: Option<f32>) {
     match v {
@@ -102,11 +100,8 @@ pub fn status(h: &mut Fnv64, s: &Status) {
     }
 }
 
-fn ekf<const N: usize>(h: &mut Fnv64, e: &Ekf<f32, N>) {
-    for v in e.x.iter() {
-        h.f32(*v);
-    }
-    for v in e.p.iter() {
+fn filter(h: &mut Fnv64, f: &FilterState<'_, f32>) {
+    for v in f.x.iter().chain(f.p) {
         h.f32(*v);
     }
 }
@@ -115,20 +110,13 @@ fn ekf<const N: usize>(h: &mut Fnv64, e: &Ekf<f32, N>) {
 /// and covariance (all entries, column-major), or a marker when the bank
 /// is not running.
 pub fn bank(h: &mut Fnv64, m: &Monitor<f32>) {
-    match m.bank() {
+    match m.filter_states() {
         None => h.u8(0),
-        Some(b) => {
+        Some(filters) => {
             h.u8(1);
-            let Bank {
-                healthy,
-                internal,
-                external,
-                both,
-            } = b;
-            ekf(h, &healthy.ekf);
-            ekf(h, &internal.ekf);
-            ekf(h, &external.ekf);
-            ekf(h, &both.ekf);
+            for f in &filters {
+                filter(h, f);
+            }
         }
     }
 }

@@ -69,7 +69,7 @@ pub fn status(w: &mut dyn Write, s: &Status) -> fmt::Result {
 /// Write every filter's state estimate (`x`, not the covariance) with bit
 /// patterns, one filter per line group.
 pub fn bank(w: &mut dyn Write, m: &Monitor<f32>) -> fmt::Result {
-    let Some(b) = m.bank() else {
+    let Some(filters) = m.filter_states() else {
         return writeln!(w, "bank not running");
     };
     let mut row = |name: &str, x: &[f32]| -> fmt::Result {
@@ -79,8 +79,8 @@ pub fn bank(w: &mut dyn Write, m: &Monitor<f32>) -> fmt::Result {
         }
         writeln!(w)
     };
-    row("healthy", b.healthy.ekf.x.as_slice())?;
-    row("internal", b.internal.ekf.x.as_slice())?;
-    row("external", b.external.ekf.x.as_slice())?;
-    row("both", b.both.ekf.x.as_slice())
+    for f in &filters {
+        row(f.hypothesis.name(), f.x)?;
+    }
+    Ok(())
 }

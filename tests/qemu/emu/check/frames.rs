@@ -11,7 +11,7 @@
 use embassy_time::{Duration, Instant};
 use firmware::app::supervisor::CHECK_PERIOD;
 use heapless::Vec;
-use monitor::alarm::AlarmState;
+use monitor::device::alarm::AlarmState;
 use monitor::protocol::schedule::{
     ALARM_REFRESH_PHASE_MS, DETAIL_PHASE_MS, HEARTBEAT_PHASE_MS, SLOW_PERIOD_MS, STATUS_PERIOD_MS,
 };

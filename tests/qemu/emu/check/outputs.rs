@@ -7,7 +7,7 @@ use embassy_time::{Duration, Instant};
 use firmware::app::shared::Shared;
 use firmware::app::supervisor::CHECK_PERIOD;
 use heapless::Vec;
-use monitor::alarm::LeakKind;
+use monitor::device::alarm::LeakKind;
 use monitor::Event;
 
 use super::frames::Frames;

@@ -4,7 +4,7 @@
 
 use embassy_time::Duration;
 use firmware::app::shared::Shared;
-use monitor::alarm::{AlarmState, LeakKind};
+use monitor::device::alarm::{AlarmState, LeakKind};
 use monitor::protocol::{e2e, CanFrame, Decoder, Encoder, Message, MessageKind};
 use qemu_tests::println;
 

@@ -16,7 +16,7 @@
 //! reported as a misfit (NIS) rather than absorbed, and each ν² enters
 //! clipped ([`CLIP_NIS`]) so that one spike does not inflate it.
 
-use crate::bank::NZ;
+use crate::estimation::bank::NZ;
 use crate::real::Real;
 
 /// Averaging time of the innovation statistics, s.

@@ -29,11 +29,13 @@
 //! laminar leakage across the covered edges (eqs. 6.4–6.5) and the piston
 //! seal (eq. 6.8).
 
-use crate::fluid::BulkModulusTable;
-use crate::load::LoadTable;
 use crate::params::Params;
+use crate::physics::fluid::BulkModulusTable;
+pub use crate::physics::friction::stribeck_decay;
+use crate::physics::load::LoadTable;
+pub use crate::physics::units::{BAR, LEAK_UNIT, LPM_PER_M3S};
+use crate::physics::valve::{opening, orifice, SpoolStep};
 use crate::real::Real;
-use crate::valve::{opening, orifice, SpoolStep};
 
 /// Number of physical states.
 pub const NX: usize = 6;
@@ -56,12 +58,6 @@ pub const X_REF: f64 = 0.1;
 pub const V_REF: f64 = 0.1;
 /// Unit of the scaled pressure states, Pa (100 bar).
 pub const P_REF: f64 = 1.0e7;
-/// Pascal per bar.
-pub const BAR: f64 = 1.0e5;
-/// Leak coefficient unit: 1 l/min per 10 bar, in m³/(s·Pa).
-pub const LEAK_UNIT: f64 = 1.0 / 60_000.0 / 1.0e6;
-/// l/min per m³/s.
-pub const LPM_PER_M3S: f64 = 60_000.0;
 /// Half-width of the rounded corner of the spool opening, fraction of travel.
 const OPENING_ROUNDING: f64 = 0.002;
 
@@ -524,13 +520,6 @@ impl<T: Real> Plant<T> {
         s[P3] += h * f3 / (T::ONE - h * stiff(j.p3_p3));
         s[P4] += h * f4 / (T::ONE - h * stiff(j.p4_p4));
     }
-}
-
-/// The model's Stribeck decay for y = c_v·|v|: 1/(1 + y + y²/2 + y³/6), a
-/// cheap stand-in for e^(−y) (within 2 % for y < 1, where the term matters).
-#[inline]
-pub fn stribeck_decay<T: Real>(y: T) -> T {
-    T::ONE / (T::ONE + y * (T::ONE + y * (T::c(0.5) + y * T::c(1.0 / 6.0))))
 }
 
 /// One prediction step: its length and how it is integrated.

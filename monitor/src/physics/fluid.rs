@@ -1,8 +1,8 @@
 //! Oil properties: pressure-dependent effective bulk modulus and the
 //! temperature dependence of laminar leakage.
 
-use crate::model::BAR;
 use crate::params::Fluid;
+use crate::physics::units::BAR;
 use crate::real::Real;
 
 const INTERVALS: usize = 64;

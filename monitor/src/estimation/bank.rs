@@ -13,13 +13,13 @@
 //! innovation squared (NIS) and the Gaussian log-likelihood, from which
 //! the decision layer builds its evidence.
 
-use crate::ekf::{Ekf, EkfError};
-use crate::hypothesis::Hypothesis;
-use crate::model::{
+use crate::estimation::ekf::{Ekf, EkfError};
+use crate::estimation::model::{
     Eval, Inputs, Leaks, Nuisance, Plant, Step, NX, P3, P4, P_REF, VP, VV, V_REF, XP, XV, X_REF,
 };
+use crate::hypothesis::Hypothesis;
+use crate::physics::valve::SpoolStep;
 use crate::real::Real;
-use crate::valve::SpoolStep;
 use nalgebra::{SMatrix, SVector};
 
 /// Number of measurements per sample (x_p, p3, p4).
@@ -34,6 +34,29 @@ pub const LAMINAR: usize = NX + 2;
 pub const NB: usize = NX + 3;
 /// States of the largest filter (both leaks).
 pub const MAX_STATES: usize = NB + 2;
+
+/// State index of a hypothesis' internal leak coefficient, if it has one.
+pub const fn internal_index(h: Hypothesis) -> Option<usize> {
+    if h.has_internal() {
+        Some(NB)
+    } else {
+        None
+    }
+}
+
+/// State index of a hypothesis' external leak coefficient, if it has one.
+pub const fn external_index(h: Hypothesis) -> Option<usize> {
+    match h {
+        Hypothesis::External => Some(NB),
+        Hypothesis::Both => Some(NB + 1),
+        _ => None,
+    }
+}
+
+/// Number of filter states of a hypothesis: plant, valve nuisance, leaks.
+pub const fn state_count(h: Hypothesis) -> usize {
+    NB + h.has_internal() as usize + h.has_external() as usize
+}
 const MEASURED: [usize; NZ] = [XP, P3, P4];
 
 /// One sample's measurements in scaled filter units (see `model`), with
@@ -151,7 +174,7 @@ impl<T: Real, const N: usize> HypothesisFilter<T, N> {
     /// leaks at zero.
     pub fn new(hypothesis: Hypothesis, s0: &[T; NX], p0_base: &[T; NB], leak_prior_sd: T) -> Self {
         debug_assert!(
-            hypothesis.states() == N,
+            state_count(hypothesis) == N,
             "state size does not match the hypothesis"
         );
         let mut x = SVector::<T, N>::zeros();
@@ -183,14 +206,8 @@ impl<T: Real, const N: usize> HypothesisFilter<T, N> {
     /// The leak coefficients in the current state.
     pub fn leaks(&self) -> Leaks<T> {
         Leaks {
-            internal: self
-                .hypothesis
-                .internal_index()
-                .map_or(T::ZERO, |i| self.ekf.x[i]),
-            external: self
-                .hypothesis
-                .external_index()
-                .map_or(T::ZERO, |i| self.ekf.x[i]),
+            internal: internal_index(self.hypothesis).map_or(T::ZERO, |i| self.ekf.x[i]),
+            external: external_index(self.hypothesis).map_or(T::ZERO, |i| self.ekf.x[i]),
         }
     }
 
@@ -221,10 +238,10 @@ impl<T: Real, const N: usize> HypothesisFilter<T, N> {
     #[inline(always)]
     fn project(&mut self, ctx: &StepContext<T>) {
         let x = &mut self.ekf.x;
-        if let Some(i) = self.hypothesis.internal_index() {
+        if let Some(i) = internal_index(self.hypothesis) {
             x[i] = x[i].max(ctx.leak_floor[0]);
         }
-        if let Some(i) = self.hypothesis.external_index() {
+        if let Some(i) = external_index(self.hypothesis) {
             x[i] = x[i].max(ctx.leak_floor[1]);
         }
         if x[XP] < T::ZERO {
@@ -321,9 +338,9 @@ impl<T: Real, const N: usize> HypothesisFilter<T, N> {
 
     /// The step's output.
     fn output(&self, ctx: &StepContext<T>, e: &Eval<T>, inn: &Innovations<T>) -> FilterOutput<T> {
-        let gref = T::c(crate::model::GAIN_REF);
-        let (leak_internal, leak_internal_sd) = self.leak(self.hypothesis.internal_index());
-        let (leak_external, leak_external_sd) = self.leak(self.hypothesis.external_index());
+        let gref = T::c(crate::estimation::model::GAIN_REF);
+        let (leak_internal, leak_internal_sd) = self.leak(internal_index(self.hypothesis));
+        let (leak_external, leak_external_sd) = self.leak(external_index(self.hypothesis));
         // Leak flow magnitude at the updated pressures: θ·|Δp| / 10 bar (a
         // seal leaks whichever way the pressure difference pushes; a
         // negative θ is an estimate below the healthy baseline).
@@ -343,7 +360,7 @@ impl<T: Real, const N: usize> HypothesisFilter<T, N> {
             innovation_sq: inn.innovation_sq,
             predicted_var: inn.predicted_var,
             valve_gain: [self.ekf.x[GAIN_EXT] * gref, self.ekf.x[GAIN_RET] * gref],
-            valve_flow_lpm: e.q_valve_a.abs() * T::c(crate::model::LPM_PER_M3S),
+            valve_flow_lpm: e.q_valve_a.abs() * T::c(crate::estimation::model::LPM_PER_M3S),
         }
     }
 }
@@ -412,13 +429,13 @@ impl<T: Real, const N: usize> Transition<T, N> {
     /// exact map; position from the updated velocity (symplectic Euler).
     pub fn new(e: &Eval<T>, dt: T, spool: &SpoolStep<T>, hypothesis: Hypothesis) -> Self {
         let j = &e.jac;
-        let stiff = crate::model::stiff::<T>;
+        let stiff = crate::estimation::model::stiff::<T>;
         let g = dt / (T::ONE - dt * stiff(j.v_v));
         let velocity = [g * j.v_x, T::ONE + g * j.v_v, g * j.v_p3, g * j.v_p4];
         let g3 = dt / (T::ONE - dt * stiff(j.p3_p3));
         let g4 = dt / (T::ONE - dt * stiff(j.p4_p4));
-        let li = hypothesis.internal_index();
-        let le = hypothesis.external_index();
+        let li = internal_index(hypothesis);
+        let le = external_index(hypothesis);
         let p3 = core::array::from_fn(|c| match c {
             XP => g3 * j.p3_x,
             VP => g3 * j.p3_v,
@@ -655,7 +672,7 @@ impl<T: Real> Bank<T> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::model::{Inputs, Step, BAR};
+    use crate::estimation::model::{Inputs, Step, BAR};
     use crate::params::Params;
 
     /// A plant, a step context and the filter settings at an operating
@@ -797,7 +814,7 @@ mod tests {
     ) -> SMatrix<T, N, N> {
         let j = &e.jac;
         let mut phi = SMatrix::<T, N, N>::identity();
-        let stiff = crate::model::stiff::<T>;
+        let stiff = crate::estimation::model::stiff::<T>;
         let g = dt / (T::ONE - dt * stiff(j.v_v));
         phi[(VP, XP)] = g * j.v_x;
         phi[(VP, VP)] = T::ONE + g * j.v_v;
@@ -830,11 +847,11 @@ mod tests {
         phi[(P4, GAIN_RET)] = g4 * j.p4_gr;
         phi[(P3, LAMINAR)] = g3 * j.p3_lam;
         phi[(P4, LAMINAR)] = g4 * j.p4_lam;
-        if let Some(i) = h.internal_index() {
+        if let Some(i) = internal_index(h) {
             phi[(P3, i)] = g3 * j.p3_li;
             phi[(P4, i)] = g4 * j.p4_li;
         }
-        if let Some(i) = h.external_index() {
+        if let Some(i) = external_index(h) {
             phi[(P4, i)] = g4 * j.p4_le;
         }
         phi
@@ -859,7 +876,7 @@ mod tests {
     /// operating point, on random SPD covariances: Φ exactly, the
     /// prediction within `tol` of √(P_aa·P_bb) of the result.
     fn prediction_matches_dense<T: Real, const N: usize>(h: Hypothesis, tol: f64) {
-        let mut rng = crate::ekf::TestRng(0x9e37_79b9_7f4a_7c15 ^ h as u64);
+        let mut rng = crate::estimation::ekf::TestRng(0x9e37_79b9_7f4a_7c15 ^ h as u64);
         for point in POINTS {
             let s = at_point::<T>(point);
             let e = eval_at(&s);
@@ -873,7 +890,7 @@ mod tests {
                 let mut fast = p0;
                 phi.predict_covariance(&mut fast, &q);
                 let mut slow = p0;
-                crate::ekf::predict_covariance_dense(&mut slow, &dense, &q_n);
+                crate::estimation::ekf::predict_covariance_dense(&mut slow, &dense, &q_n);
                 for a in 0..N {
                     for b in 0..N {
                         let scale = (slow[(a, a)] * slow[(b, b)]).sqrt().to_f64();
@@ -911,7 +928,7 @@ mod tests {
         let phi = dense_transition::<T, N>(f.hypothesis, &e, s.ctx.step.dt, &s.ctx.spool_dt);
         let q = s.noise.variances(s.ctx.step.dt);
         let q: [T; N] = core::array::from_fn(|i| q[i]);
-        crate::ekf::predict_covariance_dense(&mut f.ekf.p, &phi, &q);
+        crate::estimation::ekf::predict_covariance_dense(&mut f.ekf.p, &phi, &q);
         let w: [T; N] = core::array::from_fn(|i| match i {
             GAIN_EXT | GAIN_RET => s.ctx.gain_learning,
             i if i >= LAMINAR => s.ctx.learning,
@@ -923,7 +940,13 @@ mod tests {
             } else {
                 s.ctx.pressure_lag_s * e.f[j]
             };
-            crate::ekf::joseph_update_dense(&mut f.ekf, j, z[k], s.r[k] + lag * lag, &w);
+            crate::estimation::ekf::joseph_update_dense(
+                &mut f.ekf,
+                j,
+                z[k],
+                s.r[k] + lag * lag,
+                &w,
+            );
         }
     }
 

@@ -41,7 +41,7 @@
 //! (`params::Baseline`), times the pressure difference. Reported sizes
 //! are never negative.
 
-use crate::bank::FilterOutput;
+use crate::estimation::bank::FilterOutput;
 use crate::hypothesis::Hypothesis;
 use crate::params::Params;
 use crate::real::Real;

@@ -61,6 +61,7 @@ impl<T: Real, const N: usize> Ekf<T, N> {
 
     /// Update with a direct reading `z` of state `j` with noise variance
     /// `r`, in Joseph form. `index` names the measurement in errors.
+    #[cfg(test)]
     pub fn update_state(
         &mut self,
         j: usize,
