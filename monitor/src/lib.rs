@@ -40,6 +40,7 @@ pub mod status;
 #[cfg(test)]
 mod testutil;
 
+pub use decision::acknowledge;
 pub use hypothesis::Hypothesis;
 pub use monitor::{FilterState, Monitor};
 pub use params::Params;

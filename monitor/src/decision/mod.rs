@@ -41,6 +41,8 @@
 //! (`params::Baseline`), times the pressure difference. Reported sizes
 //! are never negative.
 
+pub mod acknowledge;
+
 use crate::estimation::bank::FilterOutput;
 use crate::hypothesis::Hypothesis;
 use crate::params::Params;
