@@ -3,13 +3,17 @@
 //! `{"id": 769, "message": "LM_Status", "data": "hex", "signals": {...}}`
 //! (`null`: not available). `scripts/check_dbc.py` decodes the frames with
 //! `cantools` against `can/leak-monitor.dbc` and compares every signal.
+//! Acknowledge frames also carry `"ack": {"key": hex, "challenge": n}`:
+//! the check recomputes their tag with Python's own HMAC-SHA256.
 //!
 //! `cargo run -p host-sim --example can_vectors`
 
+use monitor::acknowledge::AckOutcome;
 use monitor::device::alarm::{AlarmState, LeakKind};
+use monitor::protocol::auth::{acknowledge_frame, AckKey, KeyKind, DEVELOPMENT_KEY};
 use monitor::protocol::{
-    AlarmFrame, Command, CommandFrame, DetailFrame, Encoder, HeartbeatFrame, Message, ResetCause,
-    StatusFrame,
+    AlarmFrame, CanFrame, ChallengeFrame, Decoder, DetailFrame, Encoder, HeartbeatFrame, Message,
+    ResetCause, StatusFrame,
 };
 use monitor::{Hypothesis, Verdict};
 use std::collections::BTreeMap;
@@ -82,10 +86,54 @@ fn messages() -> Vec<Message> {
             can_tx_dropped: (15 - i % 16) as u8,
         }));
     }
-    v.push(Message::Command(CommandFrame {
-        command: Command::AcknowledgeAlarm,
-    }));
+    // 20 of a kind here too; every outcome code, and none.
+    for i in 0..20u32 {
+        v.push(Message::Challenge(ChallengeFrame {
+            key: KeyKind::ALL[i as usize % 2],
+            challenge: i.wrapping_mul(0x9E37_79B9) ^ (0xFFFF_0000 * (i % 2)),
+            last_ack: AckOutcome::ALL
+                .get(i as usize % (AckOutcome::ALL.len() + 1))
+                .copied(),
+            ack_attempts: (i * 13) as u8,
+        }));
+    }
     v
+}
+
+/// Acknowledge frames as a controller builds them: (key, challenge,
+/// frame), counters 0, 1, …, 14, 0, … like any other frame.
+fn acknowledges() -> Vec<([u8; 16], u32, CanFrame)> {
+    let installation = [
+        0x01, 0x23, 0x45, 0x67, 0x89, 0xab, 0xcd, 0xef, 0xfe, 0xdc, 0xba, 0x98, 0x76, 0x54, 0x32,
+        0x10,
+    ];
+    (0..20u32)
+        .map(|i| {
+            let bytes = if i % 2 == 0 {
+                DEVELOPMENT_KEY
+            } else {
+                installation
+            };
+            let challenge = i.wrapping_mul(0x2545_F491) ^ 0xDEAD_BEEF;
+            let frame = acknowledge_frame(&AckKey::installation(bytes), challenge, (i % 15) as u8);
+            (bytes, challenge, frame)
+        })
+        .collect()
+}
+
+fn line(frame: &CanFrame, msg: &Message) -> serde_json::Value {
+    let signals: BTreeMap<&str, Option<f64>> = msg
+        .signals()
+        .iter()
+        .map(|s| (s.name, s.value.physical()))
+        .collect();
+    let data: String = frame.data().iter().map(|b| format!("{b:02X}")).collect();
+    serde_json::json!({
+        "id": frame.id(),
+        "message": msg.kind().name(),
+        "data": data,
+        "signals": signals,
+    })
 }
 
 fn main() -> std::io::Result<()> {
@@ -93,19 +141,17 @@ fn main() -> std::io::Result<()> {
     let mut out = std::io::stdout().lock();
     for msg in messages() {
         let frame = enc.encode(&msg);
-        let signals: BTreeMap<&str, Option<f64>> = msg
-            .signals()
-            .iter()
-            .map(|s| (s.name, s.value.physical()))
-            .collect();
-        let data: String = frame.data().iter().map(|b| format!("{b:02X}")).collect();
-        let line = serde_json::json!({
-            "id": frame.id(),
-            "message": msg.kind().name(),
-            "data": data,
-            "signals": signals,
-        });
-        writeln!(out, "{line}")?;
+        writeln!(out, "{}", line(&frame, &msg))?;
+    }
+    for (key, challenge, frame) in acknowledges() {
+        let msg = Decoder::new()
+            .decode(&frame)
+            .expect("an acknowledge frame decodes")
+            .message;
+        let mut l = line(&frame, &msg);
+        let hex: String = key.iter().map(|b| format!("{b:02x}")).collect();
+        l["ack"] = serde_json::json!({"key": hex, "challenge": challenge});
+        writeln!(out, "{l}")?;
     }
     Ok(())
 }

@@ -13,24 +13,29 @@
 //! | 0x301 | [`StatusFrame`] | every 100 ms |
 //! | 0x302 | [`DetailFrame`] | every 1 s |
 //! | 0x303 | [`HeartbeatFrame`] | every 1 s |
-//! | 0x310 | [`CommandFrame`] | received: acknowledge a latched alarm |
+//! | 0x304 | [`ChallengeFrame`] | at once when it changes, and every 1 s |
+//! | 0x310 | [`CommandFrame`] | received: acknowledge a latched alarm, authenticated over the current challenge ([`auth`]) |
 //!
 //! Message structs hold each field as an integer in its wire unit (named
 //! in the field), so encode → decode is exact; the conversions from the
 //! monitor's floating-point [`Status`](crate::Status) round and saturate.
 
 pub mod alarm;
+pub mod auth;
+pub mod challenge;
 pub mod command;
 pub mod detail;
 pub mod e2e;
 pub mod heartbeat;
 pub mod outbox;
+pub mod p01_receiver;
 pub mod schedule;
 pub mod signal;
 pub mod status;
 
 pub use alarm::AlarmFrame;
-pub use command::{Command, CommandFrame, CommandReceiver, CommandRejected};
+pub use challenge::ChallengeFrame;
+pub use command::{Authentic, Command, CommandFrame, CommandReceiver, CommandRejected};
 pub use detail::DetailFrame;
 pub use e2e::{E2eError, Sequence};
 pub use heartbeat::{HeartbeatFrame, ResetCause};
@@ -55,17 +60,20 @@ pub enum MessageKind {
     Detail = 2,
     /// Liveness, reset cause, deadline and CPU load.
     Heartbeat = 3,
+    /// The acknowledge challenge, key kind, last acknowledge outcome.
+    Challenge = 4,
     /// Received command (acknowledge alarm).
-    Command = 4,
+    Command = 5,
 }
 
 impl MessageKind {
     /// Every kind, in identifier order.
-    pub const ALL: [MessageKind; 5] = [
+    pub const ALL: [MessageKind; 6] = [
         Self::Alarm,
         Self::Status,
         Self::Detail,
         Self::Heartbeat,
+        Self::Challenge,
         Self::Command,
     ];
 
@@ -79,6 +87,7 @@ impl MessageKind {
             Self::Status => 0x301,
             Self::Detail => 0x302,
             Self::Heartbeat => 0x303,
+            Self::Challenge => 0x304,
             Self::Command => 0x310,
         }
     }
@@ -95,6 +104,7 @@ impl MessageKind {
             Self::Status => "LM_Status",
             Self::Detail => "LM_Detail",
             Self::Heartbeat => "LM_Heartbeat",
+            Self::Challenge => "LM_Challenge",
             Self::Command => "LM_Command",
         }
     }
@@ -185,6 +195,8 @@ pub enum Message {
     Detail(DetailFrame),
     /// Heartbeat.
     Heartbeat(HeartbeatFrame),
+    /// Challenge.
+    Challenge(ChallengeFrame),
     /// Command.
     Command(CommandFrame),
 }
@@ -197,6 +209,7 @@ impl Message {
             Self::Status(_) => MessageKind::Status,
             Self::Detail(_) => MessageKind::Detail,
             Self::Heartbeat(_) => MessageKind::Heartbeat,
+            Self::Challenge(_) => MessageKind::Challenge,
             Self::Command(_) => MessageKind::Command,
         }
     }
@@ -208,6 +221,7 @@ impl Message {
             Self::Status(m) => m.signals(),
             Self::Detail(m) => m.signals(),
             Self::Heartbeat(m) => m.signals(),
+            Self::Challenge(m) => m.signals(),
             Self::Command(m) => m.signals(),
         }
     }
@@ -218,6 +232,7 @@ impl Message {
             Self::Status(m) => m.write(d),
             Self::Detail(m) => m.write(d),
             Self::Heartbeat(m) => m.write(d),
+            Self::Challenge(m) => m.write(d),
             Self::Command(m) => m.write(d),
         }
     }
@@ -228,6 +243,7 @@ impl Message {
             MessageKind::Status => Self::Status(StatusFrame::read(d)?),
             MessageKind::Detail => Self::Detail(DetailFrame::read(d)?),
             MessageKind::Heartbeat => Self::Heartbeat(HeartbeatFrame::read(d)?),
+            MessageKind::Challenge => Self::Challenge(ChallengeFrame::read(d)?),
             MessageKind::Command => Self::Command(CommandFrame::read(d)?),
         })
     }
@@ -330,7 +346,9 @@ impl Decoder {
     }
 
     /// Check (identifier, length, CRC, counter range, fields) and decode
-    /// `frame`. A frame with a bad CRC does not advance the counter check.
+    /// `frame`. Only a frame that passed every check advances the counter
+    /// check: a bad CRC or an undefined field leaves it as it was. (The
+    /// command frame's tag is not checked here: [`CommandReceiver`].)
     pub fn decode(&mut self, frame: &impl embedded_can::Frame) -> Result<Received, DecodeError> {
         let id = match frame.id() {
             embedded_can::Id::Standard(s) if !frame.is_remote_frame() => s.as_raw(),
@@ -342,9 +360,9 @@ impl Decoder {
             len: frame.data().len() as u8,
         })?;
         let counter = e2e::check(id, data).map_err(|error| DecodeError::E2e { kind, error })?;
-        let sequence = self.checks[kind as usize].check(counter);
         let message =
             Message::read(kind, data).map_err(|error| DecodeError::Field { kind, error })?;
+        let sequence = self.checks[kind as usize].check(counter);
         Ok(Received {
             message,
             counter,

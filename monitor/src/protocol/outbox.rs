@@ -73,6 +73,7 @@ mod tests {
         o.post(heartbeat(2));
         let cmd = Message::Command(CommandFrame {
             command: Command::AcknowledgeAlarm,
+            mac: [0; 6],
         });
         o.post(cmd);
         assert_eq!(o.replaced(), 1);

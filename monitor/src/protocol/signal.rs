@@ -38,10 +38,12 @@ pub enum SignalValue {
         /// Name of the code.
         name: &'static str,
     },
-    /// An integer (count, bit mask, identifier), unit-less or in `unit`.
+    /// An integer (count, bit mask, identifier, tag), unit-less or in
+    /// `unit`. At most 48 bits are used, so the physical value (f64) is
+    /// exact.
     Integer {
         /// Value.
-        value: u32,
+        value: u64,
         /// Unit (may be empty).
         unit: &'static str,
     },
@@ -137,8 +139,14 @@ impl SignalList {
     }
 
     /// An integer.
-    pub fn integer(&mut self, name: &'static str, value: u32, unit: &'static str) {
-        self.push(name, SignalValue::Integer { value, unit });
+    pub fn integer(&mut self, name: &'static str, value: impl Into<u64>, unit: &'static str) {
+        self.push(
+            name,
+            SignalValue::Integer {
+                value: value.into(),
+                unit,
+            },
+        );
     }
 
     /// A flag.

@@ -39,8 +39,15 @@ pub(crate) fn one_of_each() -> [Message; MessageKind::COUNT] {
             adc_overruns: 1,
             can_tx_dropped: 15,
         }),
+        Message::Challenge(ChallengeFrame {
+            key: auth::KeyKind::Development,
+            challenge: 0x8765_4321,
+            last_ack: Some(crate::decision::acknowledge::AckOutcome::Accepted),
+            ack_attempts: 77,
+        }),
         Message::Command(CommandFrame {
             command: Command::AcknowledgeAlarm,
+            mac: [0xA0, 0xB1, 0xC2, 0xD3, 0xE4, 0xF5],
         }),
     ]
 }
@@ -222,6 +229,29 @@ fn counter_jumps_and_repeats_are_reported() {
 }
 
 #[test]
+fn a_frame_with_an_undefined_field_does_not_advance_the_counter_check() {
+    // A frame is accepted only as a whole: a right CRC with an undefined
+    // field leaves the counter check where it was.
+    let mut enc = Encoder::new();
+    let mut dec = Decoder::new();
+    let msg = one_of_each()[1];
+    dec.decode(&enc.encode(&msg)).unwrap();
+    let mut bad = [0u8, 0x60, 0, 0, 0, 0, 0, 0];
+    e2e::protect(0x301, &mut bad, 1);
+    assert!(matches!(
+        dec.decode(&CanFrame::new(0x301, &bad).unwrap()),
+        Err(DecodeError::Field { .. })
+    ));
+    // Counter 1 again: in order (it was not taken by the bad frame).
+    let _skipped = enc.encode(&msg);
+    let mut good = [0u8; FRAME_LEN];
+    msg.write(&mut good);
+    e2e::protect(0x301, &mut good, 1);
+    let r = dec.decode(&CanFrame::new(0x301, &good).unwrap()).unwrap();
+    assert_eq!(r.sequence, Sequence::InOrder);
+}
+
+#[test]
 fn a_corrupted_frame_does_not_advance_the_counter_check() {
     let mut enc = Encoder::new();
     let mut dec = Decoder::new();
@@ -297,16 +327,17 @@ fn foreign_and_malformed_frames_are_rejected() {
         })
     ));
     assert!(matches!(
-        field(0x310, [0, 0x10, 0, 0, 0, 0, 0, 1]),
+        field(0x304, [0, 0x00, 0, 0, 0, 0, 12, 0]),
         Err(DecodeError::Field {
             error: FieldError {
-                field: "Reserved",
-                raw: 1
+                field: "AckResult",
+                raw: 12
             },
             ..
         })
     ));
-    assert!(field(0x310, [0, 0x10, 0, 0, 0, 0, 0, 0]).is_ok());
+    // Any tag decodes (the decoder does not check it).
+    assert!(field(0x310, [0, 0x10, 0, 0, 0, 0, 0, 1]).is_ok());
 }
 
 #[test]
@@ -389,7 +420,7 @@ fn heartbeat_nibbles_saturate() {
 
 #[test]
 fn signals_name_every_field_with_its_physical_value() {
-    let [alarm, status, detail, heartbeat, command] = one_of_each();
+    let [alarm, status, detail, heartbeat, challenge, command] = one_of_each();
     let names = |m: &Message| -> heapless::Vec<&'static str, 12> {
         m.signals().iter().map(|s| s.name).collect()
     };
@@ -429,7 +460,15 @@ fn signals_name_every_field_with_its_physical_value() {
             "CanTxDropped"
         ]
     );
-    assert_eq!(names(&command).as_slice(), ["Command"]);
+    assert_eq!(
+        names(&challenge).as_slice(),
+        ["AckKey", "Challenge", "AckResult", "AckAttempts"]
+    );
+    assert_eq!(names(&command).as_slice(), ["Command", "Mac"]);
+    assert_eq!(
+        command.signals()[1].value.physical(),
+        Some(0xF5E4_D3C2_B1A0_u64 as f64)
+    );
     let s = status.signals();
     assert_eq!(s[2].value.physical(), Some(0.385));
     assert_eq!(s[1].value.physical(), Some(-0.012));
