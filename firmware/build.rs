@@ -8,6 +8,12 @@
 //!   the workspace root), it is validated with the monitor's own rules and
 //!   compiled in as `INSTALLATION`; otherwise the reference rig's nominal
 //!   parameters are. A bad file fails the build, naming file and field.
+//! - Acknowledge key: `LEAK_MONITOR_ACK_KEY` (32 hexadecimal digits, the
+//!   installation's 128-bit key, see `docs/acknowledge.md`) is compiled in
+//!   as `ACK_KEY`. Without it the public development key is, with a build
+//!   warning; the firmware then reports "development key" in every
+//!   challenge frame (`AckKey`), so no one can mistake such a unit for a
+//!   protected one. A malformed or trivial key fails the build.
 use std::path::PathBuf;
 
 fn main() {
@@ -53,6 +59,38 @@ fn main() {
         }
     };
     std::fs::write(out.join("installation.rs"), code).unwrap();
+
+    println!("cargo:rerun-if-env-changed=LEAK_MONITOR_ACK_KEY");
+    let key = match std::env::var("LEAK_MONITOR_ACK_KEY")
+        .ok()
+        .filter(|v| !v.trim().is_empty())
+    {
+        None => {
+            println!(
+                "cargo:warning=LEAK_MONITOR_ACK_KEY is not set: this firmware authenticates \
+                 CAN acknowledges with the PUBLIC development key (anyone on the bus can \
+                 acknowledge; the challenge frame says `development`). Set the \
+                 installation's 128-bit key (32 hex digits) for a unit in service."
+            );
+            "/// No `LEAK_MONITOR_ACK_KEY` at build time: the public development key.\n\
+             pub const ACK_KEY: AckKey = AckKey::development();\n"
+                .to_string()
+        }
+        Some(hex) => {
+            let bytes = monitor::protocol::auth::AckKey::parse_hex(&hex)
+                .unwrap_or_else(|e| fail(&format!("LEAK_MONITOR_ACK_KEY: {e}")));
+            if monitor::protocol::auth::AckKey::installation(bytes).kind()
+                != monitor::protocol::auth::KeyKind::Installation
+            {
+                println!("cargo:warning=LEAK_MONITOR_ACK_KEY is the public development key");
+            }
+            format!(
+                "/// The installation's key (`LEAK_MONITOR_ACK_KEY` at build time).\n\
+                 pub const ACK_KEY: AckKey = AckKey::installation({bytes:?});\n"
+            )
+        }
+    };
+    std::fs::write(out.join("ack_key.rs"), key).unwrap();
 }
 
 fn fail(msg: &str) -> ! {

@@ -30,7 +30,7 @@
 #[cfg(feature = "stm32")]
 use embassy_stm32::adc::{AdcChannel, AnyAdcChannel, SampleTime};
 #[cfg(feature = "stm32")]
-use embassy_stm32::peripherals::{ADC1, CAN1, DMA2_CH0, IWDG, PB12, PB8, PB9, PC12, TIM3};
+use embassy_stm32::peripherals::{ADC1, CAN1, DMA2_CH0, IWDG, PB12, PB8, PB9, PC12, RNG, TIM3};
 #[cfg(feature = "stm32")]
 use embassy_stm32::{Peri, Peripherals};
 use monitor::signal::current_loop::{AdcSpec, CurrentLoop, OffsetDivider};
@@ -125,6 +125,8 @@ pub struct Board {
     pub can_tx: Peri<'static, PB9>,
     /// Independent watchdog.
     pub iwdg: Peri<'static, IWDG>,
+    /// True random number generator (seeds the acknowledge challenges).
+    pub rng: Peri<'static, RNG>,
 }
 
 /// Assign the pins.
@@ -149,5 +151,6 @@ pub fn split(p: Peripherals) -> Board {
         can_rx: p.PB8,
         can_tx: p.PB9,
         iwdg: p.IWDG,
+        rng: p.RNG,
     }
 }

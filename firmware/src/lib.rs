@@ -24,3 +24,11 @@
 pub mod app;
 pub mod board;
 pub mod board_map;
+
+/// The acknowledge key, compiled in by `build.rs` from
+/// `LEAK_MONITOR_ACK_KEY` (or the public development key, reported as
+/// such on the bus).
+pub mod ack_key {
+    use monitor::protocol::auth::AckKey;
+    include!(concat!(env!("OUT_DIR"), "/ack_key.rs"));
+}

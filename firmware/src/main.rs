@@ -74,8 +74,8 @@ async fn can_tx(tx: Transmitter) {
 }
 
 #[embassy_executor::task]
-async fn can_rx(rx: Receiver) {
-    app::can_rx::run(rx, &SHARED).await
+async fn can_rx(rx: Receiver, seed: u64) {
+    app::can_rx::run(rx, &SHARED, seed).await
 }
 
 /// Bring CAN up (waits for an idle bus) without holding anything else up.
@@ -85,6 +85,7 @@ async fn can_start(
     can: Peri<'static, CAN1>,
     rx: Peri<'static, PB8>,
     tx: Peri<'static, PB9>,
+    seed: u64,
 ) {
     let (tx, rx) = stm32::can::start(can, rx, tx).await;
     defmt::info!(
@@ -92,7 +93,7 @@ async fn can_start(
         monitor::protocol::BITRATE_BPS
     );
     spawner.spawn(unwrap!(can_tx(tx)));
-    spawner.spawn(unwrap!(can_rx(rx)));
+    spawner.spawn(unwrap!(can_rx(rx, seed)));
 }
 
 #[cortex_m_rt::entry]
@@ -121,6 +122,7 @@ fn start(spawner: Spawner) {
         can_rx,
         can_tx,
         iwdg,
+        rng,
     } = board_map::split(p);
     // First of all: the relay output, de-energised.
     let relay: &'static Relay = RELAY.init(Relay::new(relay));
@@ -142,11 +144,14 @@ fn start(spawner: Spawner) {
     let cycles = Dwt::new(core.DCB, core.DWT);
     let source = AdcSampler::new(adc, adc_dma, adc_trigger, inputs);
     let watchdog = Iwdg::start(iwdg);
+    // After the watchdog: a RNG that never becomes ready resets the board
+    // (relay off) instead of hanging it silently.
+    let seed = stm32::system::challenge_seed(rng);
 
     interrupt::UART4.set_priority(ESTIMATOR_PRIORITY);
     let high = EXECUTOR_HIGH.start(interrupt::UART4);
     high.spawn(unwrap!(estimator(source, relay, cycles, monitor, boot)));
 
     spawner.spawn(unwrap!(supervisor(watchdog, relay, Led::new(led))));
-    spawner.spawn(unwrap!(can_start(spawner, can, can_rx, can_tx)));
+    spawner.spawn(unwrap!(can_start(spawner, can, can_rx, can_tx, seed)));
 }

@@ -1,33 +1,96 @@
-//! The CAN receiver task (low priority): the only frame acted on is the
-//! command frame, and only when its E2E protection is intact and its
-//! counter is not a repeat of the previous command's. Nothing received
-//! can change a parameter.
+//! The CAN receiver task (low priority), owner of the acknowledge
+//! challenge. The only frame acted on is the command frame, and only when
+//! it passes every check of `CommandReceiver` (E2E P01 with its state
+//! machine, a bounded rate of tag checks, and the truncated HMAC over the
+//! current challenge; `docs/acknowledge.md`). Nothing received can change
+//! a parameter.
+//!
+//! The challenge (`LM_Challenge`, sent at once when it changes and every
+//! second) is seeded at boot by the caller (the STM32's RNG) and replaced
+//! after every authentic command frame (each answer is good once, whether
+//! the acknowledge policy then accepts it or not), when the estimator
+//! raises an alarm, and when it expires. The tag check runs here, never in
+//! the estimator's millisecond; the estimator gets only authentic
+//! commands and applies the acknowledge policy.
 
 use core::sync::atomic::Ordering;
 
-use embassy_time::Timer;
-use monitor::protocol::{CommandReceiver, CommandRejected};
+use embassy_time::{with_timeout, Duration, Instant, Timer};
+use monitor::acknowledge::AckPolicy;
+use monitor::protocol::auth::{Authenticator, Challenger};
+use monitor::protocol::{ChallengeFrame, CommandReceiver, Message};
 
 use super::shared::Shared;
 use crate::board::{CanReceive, CanRxError};
 
-/// Run the receiver for ever.
-pub async fn run<R: CanReceive>(mut rx: R, shared: &Shared) -> ! {
-    let mut commands = CommandReceiver::new();
+/// The challenge frame's refresh period.
+pub const CHALLENGE_PERIOD: Duration = Duration::from_millis(1000);
+
+/// Run the receiver for ever. `seed`: differs at every boot (hardware
+/// RNG): the challenges of this boot are derived from it.
+pub async fn run<R: CanReceive>(mut rx: R, shared: &Shared, seed: u64) -> ! {
+    let key = crate::ack_key::ACK_KEY;
+    let mut challenger = Challenger::new(&key, seed, Instant::now().as_millis());
+    let mut commands = CommandReceiver::new(Authenticator::new(&key));
+    if challenger.key_kind() == monitor::protocol::auth::KeyKind::Development {
+        defmt::warn!("CAN: acknowledges are checked with the PUBLIC development key");
+    }
+    let mut raised_seen = shared.ack.raised.load(Ordering::Acquire);
+    let mut sent: Option<ChallengeFrame> = None;
+    let mut refresh_at = Instant::now();
     loop {
-        match rx.receive().await {
-            Ok(frame) => match commands.receive(&frame) {
-                Ok(command) => {
-                    defmt::info!("CAN: command {}", command);
-                    shared.commands.signal(command);
+        let now_ms = Instant::now().as_millis();
+        let raised = shared.ack.raised.load(Ordering::Acquire);
+        if raised != raised_seen {
+            // A response computed before this alarm must not clear it.
+            raised_seen = raised;
+            challenger.rotate(now_ms);
+        }
+        challenger.rotate_if_expired(now_ms);
+        let frame = ChallengeFrame {
+            key: challenger.key_kind(),
+            challenge: challenger.current(),
+            last_ack: shared.ack.last(),
+            ack_attempts: shared.ack.attempts.load(Ordering::Relaxed),
+        };
+        if sent != Some(frame) || Instant::now() >= refresh_at {
+            shared.post(Message::Challenge(frame));
+            sent = Some(frame);
+            refresh_at = Instant::now() + CHALLENGE_PERIOD;
+        }
+        // Wake at the next refresh even without traffic; the board's
+        // receive future may be dropped (it is cancel-safe: a frame is
+        // taken only when it is returned).
+        let Ok(received) = with_timeout(
+            refresh_at.saturating_duration_since(Instant::now()),
+            rx.receive(),
+        )
+        .await
+        else {
+            continue;
+        };
+        match received {
+            Ok(frame) => {
+                let now_ms = Instant::now().as_millis();
+                match commands.receive(&frame, now_ms, challenger.challenges()) {
+                    Ok(authentic) => {
+                        // This answer is used up, whatever the policy says.
+                        challenger.rotate(now_ms);
+                        defmt::info!("CAN: authentic command {}", authentic.command);
+                        shared.commands.signal(authentic.command);
+                    }
+                    Err(e) => {
+                        // Other traffic, if the hardware filter lets it
+                        // through, is not an acknowledge attempt.
+                        if let Some(reason) = e.reason() {
+                            shared.can.rejected.fetch_add(1, Ordering::Relaxed);
+                            let t_ms = shared.sample_clock_ms(now_ms) as u64;
+                            shared.ack_attempt(AckPolicy::rejected(t_ms, reason));
+                            defmt::warn!("CAN: command not acted on: {}", e);
+                        }
+                    }
                 }
-                // Other traffic, if the hardware filter lets it through.
-                Err(CommandRejected::NotACommand) => {}
-                Err(e) => {
-                    shared.can.rejected.fetch_add(1, Ordering::Relaxed);
-                    defmt::warn!("CAN: command not acted on: {}", e);
-                }
-            },
+            }
             Err(CanRxError::Unsupported) => {}
             Err(CanRxError::Bus) => {
                 shared.can.bus_errors.fetch_add(1, Ordering::Relaxed);

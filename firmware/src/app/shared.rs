@@ -9,6 +9,7 @@ use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::blocking_mutex::Mutex;
 use embassy_sync::channel::Channel;
 use embassy_sync::signal::Signal;
+use monitor::acknowledge::{AckEvent, AckOutcome};
 use monitor::device::alarm::AlarmOutput;
 use monitor::device::deadline::LoadReport;
 use monitor::protocol::outbox::Outbox;
@@ -39,6 +40,10 @@ pub enum LogEvent {
         /// Whether a leak was latched.
         was_latched: bool,
     },
+    /// An acknowledge attempt: accepted, or rejected with its reason
+    /// (by the CAN receiver: transport and authentication; by the
+    /// estimator: the acknowledge policy).
+    AckAttempt(AckEvent),
     /// ADC data was lost.
     Overrun {
         /// Sample time after the overrun, ms.
@@ -58,6 +63,25 @@ pub struct CanStats {
     pub rejected: AtomicU32,
     /// Bus errors reported by the controller.
     pub bus_errors: AtomicU32,
+}
+
+/// Acknowledge bookkeeping between the CAN receiver (which owns the
+/// challenge and checks the tag) and the estimator (which owns the latch).
+pub struct AckShared {
+    /// `AckOutcome::code` of the last attempt (0: none since boot).
+    pub last: AtomicU8,
+    /// Attempts since boot (wrapping).
+    pub attempts: AtomicU8,
+    /// Alarms raised since boot (wrapping): the receiver issues a new
+    /// challenge when this changes.
+    pub raised: AtomicU32,
+}
+
+impl AckShared {
+    /// The last attempt's outcome.
+    pub fn last(&self) -> Option<AckOutcome> {
+        AckOutcome::from_code(self.last.load(Ordering::Relaxed))
+    }
 }
 
 /// Everything shared between tasks.
@@ -83,6 +107,8 @@ pub struct Shared {
     last_load: Mutex<CriticalSectionRawMutex, Cell<LoadReport>>,
     /// CAN counters.
     pub can: CanStats,
+    /// Acknowledge attempts and alarms raised.
+    pub ack: AckShared,
 }
 
 impl Default for Shared {
@@ -128,7 +154,19 @@ impl Shared {
                 rejected: AtomicU32::new(0),
                 bus_errors: AtomicU32::new(0),
             },
+            ack: AckShared {
+                last: AtomicU8::new(0),
+                attempts: AtomicU8::new(0),
+                raised: AtomicU32::new(0),
+            },
         }
+    }
+
+    /// Record an acknowledge attempt (for the challenge frame and the log).
+    pub fn ack_attempt(&self, e: AckEvent) {
+        self.ack.last.store(e.outcome.code(), Ordering::Relaxed);
+        self.ack.attempts.fetch_add(1, Ordering::Relaxed);
+        self.log(LogEvent::AckAttempt(e));
     }
 
     /// Queue a message for the CAN transmitter (never waits; replaces a

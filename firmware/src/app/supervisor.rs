@@ -42,6 +42,14 @@ fn log_event(e: LogEvent) {
                 was_latched
             )
         }
+        LogEvent::AckAttempt(e) => match e.outcome {
+            monitor::acknowledge::AckOutcome::Accepted => {
+                defmt::warn!("{=u64} ms: acknowledge accepted", e.t_ms)
+            }
+            monitor::acknowledge::AckOutcome::Rejected(r) => {
+                defmt::warn!("{=u64} ms: acknowledge rejected: {}", e.t_ms, r)
+            }
+        },
         LogEvent::Overrun { t_ms, lost } => {
             defmt::warn!("{=u64} ms: ADC overrun, {} samples lost", t_ms, lost)
         }

@@ -4,9 +4,10 @@
 
 use embassy_stm32::gpio::{Level, Output, Speed};
 use embassy_stm32::pac;
-use embassy_stm32::peripherals::{IWDG, PC12};
+use embassy_stm32::peripherals::{IWDG, PC12, RNG};
+use embassy_stm32::rng::{self, Rng};
 use embassy_stm32::wdg::IndependentWatchdog;
-use embassy_stm32::Peri;
+use embassy_stm32::{bind_interrupts, Peri};
 use monitor::protocol::ResetCause;
 
 use super::clocks::SYSCLK_HZ;
@@ -17,6 +18,30 @@ use firmware::board::{CycleCounter, StatusLed, Watchdog};
 /// 17 to 47 kHz, so the real timeout is 170–470 ms; the supervisor feeds
 /// every 10 ms while the estimator keeps its deadline.
 pub const WATCHDOG_TIMEOUT_US: u32 = 250_000;
+
+bind_interrupts!(struct RngIrqs {
+    RNG => rng::InterruptHandler<embassy_stm32::peripherals::RNG>;
+});
+
+/// The seed of this boot's acknowledge challenges: 64 bits from the true
+/// RNG (analogue noise, so it differs at every boot), mixed with the
+/// chip's 96-bit unique ID so that two units never share a sequence even
+/// if one RNG were stuck. The RNG is switched off again afterwards.
+pub fn challenge_seed(rng: Peri<'static, RNG>) -> u64 {
+    let mut r = Rng::new(rng, RngIrqs);
+    let random = r.next_u64();
+    let uid = embassy_stm32::uid::uid();
+    let mut mixed = random;
+    for chunk in uid.chunks(8) {
+        let mut b = [0u8; 8];
+        b[..chunk.len()].copy_from_slice(chunk);
+        // A multiply-xorshift round per word (mixing, not secrecy: the
+        // challenges are keyed by the acknowledge key).
+        mixed = (mixed ^ u64::from_le_bytes(b)).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+        mixed ^= mixed >> 29;
+    }
+    mixed
+}
 
 /// Why the chip last reset; clears the flags so the next reset reads
 /// fresh ones.

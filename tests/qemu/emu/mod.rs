@@ -33,7 +33,8 @@ use firmware::board::BootInfo;
 use firmware::board_map::{FRONTEND, SCANS_PER_SAMPLE};
 use golden::params::golden_params;
 use heapless::Vec;
-use monitor::protocol::{CanFrame, Command, CommandFrame, Encoder, Message, ResetCause};
+use monitor::protocol::auth::{acknowledge_frame, Challenger};
+use monitor::protocol::{CanFrame, ResetCause};
 use monitor::Monitor;
 use qemu_tests::counter::{self, Counter};
 use qemu_tests::{exit, println};
@@ -49,6 +50,12 @@ static SHARED: Shared = Shared::new();
 static RELAY: RecordingRelay = RecordingRelay::new();
 static EXECUTOR_HIGH: InterruptExecutor = InterruptExecutor::new();
 static EXECUTOR_LOW: InterruptExecutor = InterruptExecutor::new();
+
+/// The seed of the acknowledge challenges. The STM32 board takes it from
+/// its true RNG (mixed with the chip's unique ID); the emulated board has
+/// neither (QEMU's netduinoplus2 does not model the RNG, and this board
+/// does not use the HAL), so a fixed board value: "EMUBOARD".
+pub const CHALLENGE_SEED: u64 = u64::from_le_bytes(*b"EMUBOARD");
 
 /// The reset cause the emulated board reports.
 const RESET_CAUSE: ResetCause = ResetCause::PowerOn;
@@ -118,7 +125,7 @@ async fn can_tx() {
 
 #[embassy_executor::task]
 async fn can_rx(rx: ScriptedCanRx) {
-    app::can_rx::run(rx, &SHARED).await
+    app::can_rx::run(rx, &SHARED, CHALLENGE_SEED).await
 }
 
 /// Wait for the end of the replay, check, and end the run.
@@ -150,6 +157,9 @@ async fn checker(case: &'static EmuCase, t0: Instant, expect: Expect) {
 /// 100 samples before, the acknowledge itself half a sample before (the
 /// receiver task signals it while the estimator waits for the next
 /// block), and a replay of it 50 samples after. Only the second may act.
+/// The acknowledge answers the first challenge of the boot, as a
+/// controller holding the firmware's key computes it (no alarm raised
+/// before it rotates the challenge yet).
 fn commands(case: &EmuCase, t0: Instant) -> (Vec<(Instant, CanFrame), 3>, u32) {
     let mut script = Vec::new();
     let Some(ack) = case.ack_sample else {
@@ -157,9 +167,9 @@ fn commands(case: &EmuCase, t0: Instant) -> (Vec<(Instant, CanFrame), 3>, u32) {
     };
     let period = Duration::from_micros(u64::from(case.sample_period_us));
     let at = |k: u32| t0 + period * k + period / 2;
-    let frame = Encoder::new().encode(&Message::Command(CommandFrame {
-        command: Command::AcknowledgeAlarm,
-    }));
+    let key = firmware::ack_key::ACK_KEY;
+    let challenge = Challenger::new(&key, CHALLENGE_SEED, 0).current();
+    let frame = acknowledge_frame(&key, challenge, 0);
     let mut data = [0u8; 8];
     data.copy_from_slice(frame.data());
     data[2] ^= 0x01;

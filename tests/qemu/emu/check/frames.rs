@@ -61,7 +61,8 @@ fn due(kind: MessageKind, t_ms: u64, changed: bool) -> bool {
         MessageKind::Status => t_ms % STATUS_PERIOD_MS == 0,
         MessageKind::Detail => slow(DETAIL_PHASE_MS),
         MessageKind::Heartbeat => slow(HEARTBEAT_PHASE_MS),
-        MessageKind::Command => false,
+        // Sent by the CAN receiver task on its own clock.
+        MessageKind::Challenge | MessageKind::Command => false,
     }
 }
 
@@ -154,7 +155,7 @@ fn kind(case: &EmuCase, frames: &Frames, kind: MessageKind, expect: &Expect, f: 
                         heartbeat(&h, g.at, expect, f);
                         true
                     }
-                    Message::Command(_) => false,
+                    Message::Challenge(_) | Message::Command(_) => false,
                 };
                 if !same {
                     let host = match kind {
@@ -257,7 +258,11 @@ pub fn check(case: &EmuCase, log: &Log, expect: &Expect, f: &mut Findings) -> Fr
             format_args!("the firmware sent a command: {:?}", d),
         );
     }
-    if let Some(d) = frames.list.iter().find(|d| d.k.is_none()) {
+    if let Some(d) = frames
+        .list
+        .iter()
+        .find(|d| d.k.is_none() && d.msg.kind() != MessageKind::Challenge)
+    {
         f.fail(
             Check::Schedule,
             format_args!("sent before the first sample: {:?}", d),
