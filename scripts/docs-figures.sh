@@ -217,10 +217,12 @@ print(f'| static RAM (`.data`, `.bss`, RTT buffer) | {b(ram)} | |')
 print(f'| stack, worst case (estimate) | {b(stack)} | |')
 print(f'| RAM in all | {b(ram + stack)} | 48 KiB |')
 print()
-print(f'Stack estimate by part: thread mode {part("thread mode") / 1024:.1f} KiB (including the one-off '
-      f'set-up), the estimator\'s interrupt executor {part("estimator (UART4)") / 1024:.1f} KiB '
-      f'(the filter bank step), an interrupt handler {part("HAL interrupt")} B, '
-      f'two exception frames {part("exception frames")} B.')
+n = lambda label: f'{part(label):,} B'.replace(',', ' ')
+print(f'Stack estimate by part: thread mode {n("thread mode")}, the estimator\'s interrupt '
+      f'executor preempting it {n("estimator (UART4)")}, one interrupt handler '
+      f'{n("HAL interrupt")}, two exception frames {n("exception frames")} '
+      f'(`python3 scripts/stack_estimate.py target/thumbv7em-none-eabihf/release/firmware` '
+      f'prints the deepest chains).')
 PY
   replace_block docs/firmware.md size "$out/size.block.md"
 }
