@@ -38,8 +38,11 @@ out=target/docs-figures
 mkdir -p "$out"
 hs=target/release/host-sim
 reuse=${REUSE:-0}
-commit=$(git rev-parse --short HEAD 2>/dev/null || echo unknown)
-dirty=$(git status --porcelain --untracked-files=no -- monitor plant host-sim firmware tests 2>/dev/null | head -1)
+# The figures depend on the code, not on the docs: name the last commit that
+# changed what produces them (documentation-only commits do not move it).
+code=(monitor plant host-sim firmware tests golden examples Cargo.toml Cargo.lock .cargo memory.x rust-toolchain.toml)
+commit=$(git log -1 --format=%h -- "${code[@]}" 2>/dev/null || echo unknown)
+dirty=$(git status --porcelain --untracked-files=no -- "${code[@]}" 2>/dev/null | head -1)
 [ -z "$dirty" ] || commit="$commit + uncommitted changes"
 rustc_v=$(rustc --version | cut -d' ' -f2)
 
@@ -96,7 +99,7 @@ PY
 }
 
 fig_golden() {
-  step "golden: the golden cases' summaries (written into $out, not tests/golden/data)"
+  step "golden: the golden cases' summaries (written into $out, not golden/data)"
   if [ "$reuse" != 1 ] || [ ! -s "$out/golden.txt" ]; then
     build_host_sim
     # The same arguments as scripts/golden.sh.
@@ -126,7 +129,8 @@ fig_throughput() {
   fi
   cpu=$(sed -n 's/^model name[[:space:]]*: //p' /proc/cpuinfo 2>/dev/null | head -1)
   cores=$(nproc 2>/dev/null || echo '?')
-  python3 - "$out/throughput.txt" "$cpu" "$cores" "$commit" <<'PY' > "$out/throughput.block.md"
+  [ "$reuse" = 1 ] && [ -s "$out/throughput.load" ] || cut -d' ' -f1 /proc/loadavg > "$out/throughput.load" 2>/dev/null || echo '?' > "$out/throughput.load"
+  python3 - "$out/throughput.txt" "$cpu" "$cores" "$commit" "$(cat "$out/throughput.load")" <<'PY' > "$out/throughput.block.md"
 import sys
 runs = sorted(int(x) for x in open(sys.argv[1]) if x.strip())
 med = runs[len(runs) // 2]
@@ -135,8 +139,8 @@ print(f'Replay throughput, release build, one thread, plain CSV, a 300 s simulat
       f'recording: **{fmt(med)} samples per second** (median of {len(runs)} runs: '
       f'{", ".join(fmt(r) for r in runs)}), i.e. about {med // 1000}× real time at 1 kHz. '
       f'Measured by `scripts/docs-figures.sh throughput` at commit `{sys.argv[4]}` on '
-      f'{sys.argv[2] or "an unnamed CPU"} ({sys.argv[3]} cores, shared with other work: '
-      f'take it as an order of magnitude).')
+      f'{sys.argv[2] or "an unnamed CPU"} ({sys.argv[3]} cores, load average {sys.argv[5]} '
+      f'when measured: other work shares the machine, so take it as an order of magnitude).')
 PY
   replace_block docs/performance.md throughput "$out/throughput.block.md"
 }
