@@ -67,10 +67,13 @@ impl CycleCounter for Dwt {
 pub struct Iwdg(IndependentWatchdog<'static, IWDG>);
 
 impl Iwdg {
-    /// Start the watchdog (it cannot be stopped again). It pauses while
-    /// a debugger halts the core, so a breakpoint does not reset the board.
+    /// Start the watchdog (it cannot be stopped again). In a debug build it
+    /// pauses while a debugger halts the core, so a breakpoint does not
+    /// reset the board; a release build never freezes it.
     pub fn start(iwdg: Peri<'static, IWDG>) -> Self {
-        pac::DBGMCU.apb1fzr().modify(|w| w.set_iwdg(true));
+        if cfg!(debug_assertions) {
+            pac::DBGMCU.apb1fzr().modify(|w| w.set_iwdg(true));
+        }
         let mut w = IndependentWatchdog::new(iwdg, WATCHDOG_TIMEOUT_US);
         w.unleash();
         Self(w)
@@ -100,12 +103,14 @@ impl StatusLed for Led {
 }
 
 /// Hard fault (a panic ends here too, through panic-probe's `udf`):
-/// de-energise the relay at once. With a debugger attached, stop for it;
-/// otherwise reset (the heartbeat then reports a software reset).
+/// de-energise the relay at once, then reset (the heartbeat then reports a
+/// software reset). Only a debug build with a debugger attached stops for
+/// it: the debug-enable bit stays set after a probe is unplugged, and a
+/// release board that halted there would hang until power-cycled.
 #[cortex_m_rt::exception]
 unsafe fn HardFault(_frame: &cortex_m_rt::ExceptionFrame) -> ! {
     super::relay::force_off();
-    if cortex_m::peripheral::DCB::is_debugger_attached() {
+    if cfg!(debug_assertions) && cortex_m::peripheral::DCB::is_debugger_attached() {
         loop {
             cortex_m::asm::bkpt();
         }
