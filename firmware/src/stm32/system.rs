@@ -7,6 +7,7 @@ use embassy_stm32::pac;
 use embassy_stm32::peripherals::{IWDG, PC12};
 use embassy_stm32::wdg::IndependentWatchdog;
 use embassy_stm32::Peri;
+use monitor::device::diagnostics::brownout::{self, BorLevel};
 use monitor::protocol::ResetCause;
 
 use super::clocks::SYSCLK_HZ;
@@ -41,6 +42,26 @@ pub fn take_reset_cause() -> ResetCause {
     };
     pac::RCC.csr().modify(|w| w.set_rmvf(true));
     cause
+}
+
+/// Make sure the brown-out reset level is the one the monitor requires
+/// (`monitor::device::diagnostics::brownout`), programming the option bytes
+/// once if it is lower (a factory-fresh part has it off). Returns the level
+/// now in force; a level still too low after programming is a device fault
+/// for the caller.
+pub fn ensure_brownout_level() -> BorLevel {
+    let optcr = pac::FLASH.optcr().read().0;
+    let Some(wanted) = brownout::required_optcr(optcr) else {
+        return brownout::level(optcr);
+    };
+    // RM0090 §3.6.2: unlock the option bytes, write, start, wait, lock.
+    pac::FLASH.optkeyr().write_value(0x0819_2A3B);
+    pac::FLASH.optkeyr().write_value(0x4C5D_6E7F);
+    pac::FLASH.optcr().write_value(pac::flash::regs::Optcr(wanted));
+    pac::FLASH.optcr().modify(|w| w.set_optstrt(true));
+    while pac::FLASH.sr().read().bsy() {}
+    pac::FLASH.optcr().modify(|w| w.set_optlock(true));
+    brownout::level(pac::FLASH.optcr().read().0)
 }
 
 /// The DWT cycle counter.
