@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Regenerate the golden cases of the on-target tests (tests/golden/data) from
+# Regenerate the golden cases of the on-target tests (golden/data) from
 # the current monitor: run this after any change to the monitor's numbers,
 # check `cargo qemu-test` still passes, and commit the files it changes.
 # CI fails while they are stale (host-sim/tests/golden.rs).
@@ -10,7 +10,7 @@
 # layer's evidence phase and, for the leak, its alarms.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-dir=tests/golden/data
+dir=golden/data
 cargo build --release -p host-sim
 hs=target/release/host-sim
 mkdir -p "$dir"

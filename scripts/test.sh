@@ -22,6 +22,7 @@ python3 -c 'import cantools, e2e' 2>/dev/null || pip_install 'cantools==45.1.0' 
 
 step "format"
 cargo fmt --all --check
+scripts/check-docs.sh  # README ≤ 250 lines, links in README.md and docs/ resolve
 
 step "clippy (host crates, all targets)"
 cargo clippy --all-targets -- -D warnings

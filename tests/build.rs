@@ -26,7 +26,7 @@ fn main() {
     println!("cargo:rerun-if-changed=../firmware/src/board_map.rs");
     println!("cargo:rerun-if-changed=build/emu.rs");
 
-    let data = here.join("golden/data");
+    let data = here.join("../golden/data");
     println!("cargo:rerun-if-changed={}", data.display());
     let mut names: Vec<String> = std::fs::read_dir(&data)
         .unwrap_or_else(|e| panic!("{}: {e}", data.display()))
@@ -38,7 +38,7 @@ fn main() {
     names.sort();
     assert!(!names.is_empty(), "no golden cases in {}", data.display());
     let mut src = String::from(
-        "/// The golden cases in `tests/golden/data`, by name.\npub static CASES: &[Case] = &[\n",
+        "/// The golden cases in `golden/data`, by name.\npub static CASES: &[Case] = &[\n",
     );
     for n in &names {
         let input = data.join(format!("{n}.input.bin"));

@@ -38,8 +38,11 @@ pub enum CanTxError {
 /// The CAN transmitter.
 pub trait CanTransmit {
     /// Queue `frame` for transmission; waits while every transmit buffer
-    /// is full (callers bound the wait with a timeout).
-    async fn transmit(&mut self, frame: &CanFrame) -> Result<(), CanTxError>;
+    /// is full (callers bound the wait with a timeout). Returns how many
+    /// pending frames the controller gave up to make room (bxCAN replaces
+    /// a waiting lower-priority frame by a higher-priority one): those are
+    /// lost and count as dropped.
+    async fn transmit(&mut self, frame: &CanFrame) -> Result<u8, CanTxError>;
 
     /// Abort frames still waiting for the bus (after a timeout: bus off
     /// or no other node acknowledging). Returns how many were aborted.

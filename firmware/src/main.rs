@@ -131,6 +131,8 @@ fn start(spawner: Spawner) {
         env!("CARGO_PKG_VERSION"),
         boot.reset_cause
     );
+    let bor = stm32::system::ensure_brownout_level();
+    defmt::info!("brown-out reset level: {}", bor);
     defmt::info!(
         "installation parameters: {}",
         installation::INSTALLATION_SOURCE

@@ -62,7 +62,7 @@ impl Decimator {
 
     /// Offer the next point of the stream.
     pub fn push(&mut self, p: Point) {
-        if self.seen % self.stride == 0 {
+        if self.seen.is_multiple_of(self.stride) {
             self.points.push(p);
             if self.points.len() >= 2 * self.max {
                 // Keep the points at even multiples of the new stride.

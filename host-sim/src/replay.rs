@@ -163,7 +163,7 @@ impl<W: Write> TraceWriter<W> {
 impl<W: Write> Observer for TraceWriter<W> {
     fn observe(&mut self, _: &Sample, s: &Status) -> std::io::Result<()> {
         self.n += 1;
-        if self.n % self.every != 0 {
+        if !self.n.is_multiple_of(self.every) {
             return Ok(());
         }
         let e = &s.evidence;

@@ -1,5 +1,5 @@
 //! The golden cases the QEMU tests check the Cortex-M4F against
-//! (`tests/golden/data`) must be what the current code computes on the
+//! (`golden/data`) must be what the current code computes on the
 //! host: regenerate them with `scripts/golden.sh` after changing the
 //! monitor's numbers.
 
@@ -9,7 +9,7 @@ use std::path::Path;
 #[test]
 fn committed_goldens_are_up_to_date() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
-    let dir = root.join("tests/golden/data");
+    let dir = root.join("golden/data");
     let stale = golden::check(&dir, &root).expect("golden cases readable");
     assert!(
         stale.is_empty(),
@@ -30,7 +30,7 @@ fn a_leak_case_raises_its_alarm_within_the_cut() {
     // The leak golden is only worth its bytes if it reaches the decision
     // layer's alarm path.
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
-    let both = golden::spec_of(&root.join("tests/golden/data/both")).unwrap();
+    let both = golden::spec_of(&root.join("golden/data/both")).unwrap();
     let case = golden::generate(&root, &both).unwrap();
     assert_eq!(case.verdict, monitor::Verdict::Both);
     assert!(case.events.len() >= 2, "{:?}", case.events);
@@ -39,7 +39,7 @@ fn a_leak_case_raises_its_alarm_within_the_cut() {
 #[test]
 fn a_stale_golden_is_reported() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
-    let src = root.join("tests/golden/data");
+    let src = root.join("golden/data");
     let tmp = tempfile::tempdir().unwrap();
     for name in ["healthy.input.bin", "healthy.expected.bin"] {
         std::fs::copy(src.join(name), tmp.path().join(name)).unwrap();

@@ -32,7 +32,7 @@ fn one_hour_healthy_stays_finite_psd_and_silent() {
             assert!(v.is_finite() && s.leak_external_lpm.unwrap().is_finite());
         }
         n += 1;
-        if n % 60_000 == 0 {
+        if n.is_multiple_of(60_000) {
             for e in common::min_covariance_eigenvalues(&m).unwrap() {
                 worst = worst.min(e);
                 assert!(e > -1e-9, "covariance not PSD at t = {}: {e}", s.t_s);

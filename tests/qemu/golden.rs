@@ -1,4 +1,4 @@
-//! Bit-identity on the Cortex-M4F: every golden case (tests/golden/data)
+//! Bit-identity on the Cortex-M4F: every golden case (golden/data)
 //! replayed through `Monitor::step` must give, sample by sample, exactly
 //! the statuses and filter states the host computed on x86-64.
 //!
@@ -95,7 +95,7 @@ fn check_case(case: &Case) -> bool {
             }
             let _ = writeln!(
                 out,
-                "--- compare with the host: host-sim golden show tests/golden/data/{} --sample {}",
+                "--- compare with the host: host-sim golden show golden/data/{} --sample {}",
                 case.name, d.sample
             );
         }

@@ -1,5 +1,5 @@
 //! The golden cases compiled into flash (listed by `build.rs` from
-//! `tests/golden/data`; written by `scripts/golden.sh`).
+//! `golden/data`; written by `scripts/golden.sh`).
 
 /// One golden case: the input file and the host's expected outputs.
 #[derive(Clone, Copy, Debug)]

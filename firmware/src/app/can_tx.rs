@@ -26,8 +26,13 @@ pub async fn run<T: CanTransmit>(mut tx: T, shared: &Shared) -> ! {
         while let Some(msg) = shared.take_next() {
             let frame = encoder.encode(&msg);
             match with_timeout(TX_TIMEOUT, tx.transmit(&frame)).await {
-                Ok(Ok(())) => {
+                Ok(Ok(displaced)) => {
                     shared.can.sent.fetch_add(1, Ordering::Relaxed);
+                    // A waiting frame given up for this one is lost.
+                    shared
+                        .can
+                        .dropped
+                        .fetch_add(displaced as u32, Ordering::Relaxed);
                     if core::mem::take(&mut failing) {
                         defmt::info!("CAN: transmitting again");
                     }

@@ -98,7 +98,7 @@ pub async fn run<W: Watchdog, R: RelayOutput, L: StatusLed>(
             log_event(e);
         }
         checks = checks.wrapping_add(1);
-        if checks % SUMMARY_EVERY == 0 {
+        if checks.is_multiple_of(SUMMARY_EVERY) {
             let load = shared.load();
             defmt::info!(
                 "{=u64} s: {} | samples {} missed {} | load {}% peak {}% | CAN sent {} dropped {} replaced {} rejected {} bus errors {} | log dropped {}",

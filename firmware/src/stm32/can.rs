@@ -57,11 +57,11 @@ pub async fn start(
 pub struct Transmitter(CanTx<'static>);
 
 impl CanTransmit for Transmitter {
-    async fn transmit(&mut self, frame: &CanFrame) -> Result<(), CanTxError> {
+    async fn transmit(&mut self, frame: &CanFrame) -> Result<u8, CanTxError> {
         let id = StandardId::new(frame.id()).ok_or(CanTxError::Rejected)?;
         let f = Frame::new_data(id, frame.data()).map_err(|_| CanTxError::Rejected)?;
-        self.0.write(&f).await;
-        Ok(())
+        let status = self.0.write(&f).await;
+        Ok(status.dequeued_frame().is_some() as u8)
     }
 
     fn abort_pending(&mut self) -> u8 {

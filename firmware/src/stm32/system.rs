@@ -8,6 +8,7 @@ use embassy_stm32::peripherals::{IWDG, PC12, RNG};
 use embassy_stm32::rng::{self, Rng};
 use embassy_stm32::wdg::IndependentWatchdog;
 use embassy_stm32::{bind_interrupts, Peri};
+use monitor::device::diagnostics::brownout::{self, BorLevel};
 use monitor::protocol::ResetCause;
 
 use super::clocks::SYSCLK_HZ;
@@ -68,6 +69,26 @@ pub fn take_reset_cause() -> ResetCause {
     cause
 }
 
+/// Make sure the brown-out reset level is the one the monitor requires
+/// (`monitor::device::diagnostics::brownout`), programming the option bytes
+/// once if it is lower (a factory-fresh part has it off). Returns the level
+/// now in force; a level still too low after programming is a device fault
+/// for the caller.
+pub fn ensure_brownout_level() -> BorLevel {
+    let optcr = pac::FLASH.optcr().read().0;
+    let Some(wanted) = brownout::required_optcr(optcr) else {
+        return brownout::level(optcr);
+    };
+    // RM0090 §3.6.2: unlock the option bytes, write, start, wait, lock.
+    pac::FLASH.optkeyr().write_value(0x0819_2A3B);
+    pac::FLASH.optkeyr().write_value(0x4C5D_6E7F);
+    pac::FLASH.optcr().write_value(pac::flash::regs::Optcr(wanted));
+    pac::FLASH.optcr().modify(|w| w.set_optstrt(true));
+    while pac::FLASH.sr().read().bsy() {}
+    pac::FLASH.optcr().modify(|w| w.set_optlock(true));
+    brownout::level(pac::FLASH.optcr().read().0)
+}
+
 /// The DWT cycle counter.
 pub struct Dwt;
 
@@ -92,10 +113,13 @@ impl CycleCounter for Dwt {
 pub struct Iwdg(IndependentWatchdog<'static, IWDG>);
 
 impl Iwdg {
-    /// Start the watchdog (it cannot be stopped again). It pauses while
-    /// a debugger halts the core, so a breakpoint does not reset the board.
+    /// Start the watchdog (it cannot be stopped again). In a debug build it
+    /// pauses while a debugger halts the core, so a breakpoint does not
+    /// reset the board; a release build never freezes it.
     pub fn start(iwdg: Peri<'static, IWDG>) -> Self {
-        pac::DBGMCU.apb1fzr().modify(|w| w.set_iwdg(true));
+        if cfg!(debug_assertions) {
+            pac::DBGMCU.apb1fzr().modify(|w| w.set_iwdg(true));
+        }
         let mut w = IndependentWatchdog::new(iwdg, WATCHDOG_TIMEOUT_US);
         w.unleash();
         Self(w)
@@ -125,12 +149,14 @@ impl StatusLed for Led {
 }
 
 /// Hard fault (a panic ends here too, through panic-probe's `udf`):
-/// de-energise the relay at once. With a debugger attached, stop for it;
-/// otherwise reset (the heartbeat then reports a software reset).
+/// de-energise the relay at once, then reset (the heartbeat then reports a
+/// software reset). Only a debug build with a debugger attached stops for
+/// it: the debug-enable bit stays set after a probe is unplugged, and a
+/// release board that halted there would hang until power-cycled.
 #[cortex_m_rt::exception]
 unsafe fn HardFault(_frame: &cortex_m_rt::ExceptionFrame) -> ! {
     super::relay::force_off();
-    if cortex_m::peripheral::DCB::is_debugger_attached() {
+    if cfg!(debug_assertions) && cortex_m::peripheral::DCB::is_debugger_attached() {
         loop {
             cortex_m::asm::bkpt();
         }

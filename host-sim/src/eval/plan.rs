@@ -293,7 +293,7 @@ pub fn plan(config: &PlanConfig) -> Plan {
 
 fn cell_jobs(b: &CellRuns, quick: bool, special: bool, rig: u64, jobs: &mut Vec<Job>) {
     let none = Leak::default();
-    let even = rig % 2 == 0;
+    let even = rig.is_multiple_of(2);
     // Healthy closed loop; the first is the faults' twin on the special cell.
     let healthy_runs = if quick { 1 } else { 2 };
     let mut twin = None;

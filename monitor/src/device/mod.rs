@@ -3,4 +3,5 @@
 
 pub mod alarm;
 pub mod deadline;
+pub mod diagnostics;
 pub mod supervisor;

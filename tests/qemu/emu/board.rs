@@ -121,7 +121,7 @@ impl RelayOutput for RecordingRelay {
 pub struct RecordingCanTx;
 
 impl CanTransmit for RecordingCanTx {
-    async fn transmit(&mut self, frame: &CanFrame) -> Result<(), CanTxError> {
+    async fn transmit(&mut self, frame: &CanFrame) -> Result<u8, CanTxError> {
         let sent = Sent {
             at: Instant::now(),
             frame: *frame,
@@ -131,7 +131,7 @@ impl CanTransmit for RecordingCanTx {
                 l.overflow = true;
             }
         });
-        Ok(())
+        Ok(0)
     }
 
     fn abort_pending(&mut self) -> u8 {

@@ -15,7 +15,7 @@ const REFERENCE_RECORD: usize = 24;
 /// One golden case on the emulated board.
 #[derive(Debug)]
 pub struct EmuCase {
-    /// Case name (file stem in `tests/golden/data`).
+    /// Case name (file stem in `golden/data`).
     pub name: &'static str,
     /// The recording it was cut from.
     pub source: &'static str,

@@ -58,7 +58,7 @@ fn due(kind: MessageKind, t_ms: u64, changed: bool) -> bool {
     let slow = |phase: u64| t_ms == 0 || t_ms % SLOW_PERIOD_MS == phase;
     match kind {
         MessageKind::Alarm => changed || slow(ALARM_REFRESH_PHASE_MS),
-        MessageKind::Status => t_ms % STATUS_PERIOD_MS == 0,
+        MessageKind::Status => t_ms.is_multiple_of(STATUS_PERIOD_MS),
         MessageKind::Detail => slow(DETAIL_PHASE_MS),
         MessageKind::Heartbeat => slow(HEARTBEAT_PHASE_MS),
         // Sent by the CAN receiver task on its own clock.
