@@ -8,7 +8,7 @@
 //!
 //! `cargo run -p host-sim --example can_vectors`
 
-use monitor::acknowledge::AckOutcome;
+use monitor::acknowledge::AckResult;
 use monitor::device::alarm::{AlarmState, LeakKind};
 use monitor::protocol::auth::{acknowledge_frame, AckKey, KeyKind, DEVELOPMENT_KEY};
 use monitor::protocol::{
@@ -91,8 +91,8 @@ fn messages() -> Vec<Message> {
         v.push(Message::Challenge(ChallengeFrame {
             key: KeyKind::ALL[i as usize % 2],
             challenge: i.wrapping_mul(0x9E37_79B9) ^ (0xFFFF_0000 * (i % 2)),
-            last_ack: AckOutcome::ALL
-                .get(i as usize % (AckOutcome::ALL.len() + 1))
+            last_ack: AckResult::ALL
+                .get(i as usize % (AckResult::ALL.len() + 1))
                 .copied(),
             ack_attempts: (i * 13) as u8,
         }));

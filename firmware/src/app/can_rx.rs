@@ -5,9 +5,10 @@
 //! current challenge; `docs/acknowledge.md`). Nothing received can change
 //! a parameter.
 //!
-//! The challenge (`LM_Challenge`, sent at once when it changes and every
+//! The challenge and the checks are `monitor::protocol::gate::AckGate`:
+//! the challenge (`LM_Challenge`, sent at once when it changes and every
 //! second) is seeded at boot by the caller (the STM32's RNG) and replaced
-//! after every authentic command frame (each answer is good once, whether
+//! after every frame with a right tag (each answer is good once, whether
 //! the acknowledge policy then accepts it or not), when the estimator
 //! raises an alarm, and when it expires. The tag check runs here, never in
 //! the estimator's millisecond; the estimator gets only authentic
@@ -16,9 +17,9 @@
 use core::sync::atomic::Ordering;
 
 use embassy_time::{with_timeout, Duration, Instant, Timer};
-use monitor::acknowledge::AckPolicy;
-use monitor::protocol::auth::{Authenticator, Challenger};
-use monitor::protocol::{ChallengeFrame, CommandReceiver, Message};
+use monitor::protocol::auth::KeyKind;
+use monitor::protocol::gate::{AckGate, GateOutcome};
+use monitor::protocol::{ChallengeFrame, Message};
 
 use super::shared::Shared;
 use crate::board::{CanReceive, CanRxError};
@@ -29,30 +30,21 @@ pub const CHALLENGE_PERIOD: Duration = Duration::from_millis(1000);
 /// Run the receiver for ever. `seed`: differs at every boot (hardware
 /// RNG): the challenges of this boot are derived from it.
 pub async fn run<R: CanReceive>(mut rx: R, shared: &Shared, seed: u64) -> ! {
-    let key = crate::ack_key::ACK_KEY;
-    let mut challenger = Challenger::new(&key, seed, Instant::now().as_millis());
-    let mut commands = CommandReceiver::new(Authenticator::new(&key));
-    if challenger.key_kind() == monitor::protocol::auth::KeyKind::Development {
+    let mut gate = AckGate::new(&crate::ack_key::ACK_KEY, seed, Instant::now().as_millis());
+    if gate.key_kind() == KeyKind::Development {
         defmt::warn!("CAN: acknowledges are checked with the PUBLIC development key");
     }
-    let mut raised_seen = shared.ack.raised.load(Ordering::Acquire);
     let mut sent: Option<ChallengeFrame> = None;
     let mut refresh_at = Instant::now();
     loop {
         let now_ms = Instant::now().as_millis();
-        let raised = shared.ack.raised.load(Ordering::Acquire);
-        if raised != raised_seen {
-            // A response computed before this alarm must not clear it.
-            raised_seen = raised;
-            challenger.rotate(now_ms);
-        }
-        challenger.rotate_if_expired(now_ms);
-        let frame = ChallengeFrame {
-            key: challenger.key_kind(),
-            challenge: challenger.current(),
-            last_ack: shared.ack.last(),
-            ack_attempts: shared.ack.attempts.load(Ordering::Relaxed),
-        };
+        // A response computed before an alarm must not clear it.
+        gate.alarms_raised(shared.ack.raised.load(Ordering::Acquire), now_ms);
+        gate.tick(now_ms);
+        let frame = gate.frame(
+            shared.ack.last(),
+            shared.ack.attempts.load(Ordering::Relaxed),
+        );
         if sent != Some(frame) || Instant::now() >= refresh_at {
             shared.post(Message::Challenge(frame));
             sent = Some(frame);
@@ -72,23 +64,18 @@ pub async fn run<R: CanReceive>(mut rx: R, shared: &Shared, seed: u64) -> ! {
         match received {
             Ok(frame) => {
                 let now_ms = Instant::now().as_millis();
-                match commands.receive(&frame, now_ms, challenger.challenges()) {
-                    Ok(authentic) => {
-                        // This answer is used up, whatever the policy says.
-                        challenger.rotate(now_ms);
+                let t_ms = shared.sample_clock_ms(now_ms) as u64;
+                match gate.receive(&frame, now_ms, t_ms) {
+                    GateOutcome::Authentic(authentic) => {
                         defmt::info!("CAN: authentic command {}", authentic.command);
                         shared.commands.signal(authentic.command);
                     }
-                    Err(e) => {
-                        // Other traffic, if the hardware filter lets it
-                        // through, is not an acknowledge attempt.
-                        if let Some(reason) = e.reason() {
-                            shared.can.rejected.fetch_add(1, Ordering::Relaxed);
-                            let t_ms = shared.sample_clock_ms(now_ms) as u64;
-                            shared.ack_attempt(AckPolicy::rejected(t_ms, reason));
-                            defmt::warn!("CAN: command not acted on: {}", e);
-                        }
+                    GateOutcome::Rejected(event) => {
+                        shared.can.rejected.fetch_add(1, Ordering::Relaxed);
+                        shared.ack_attempt(event);
                     }
+                    // Other traffic, if the hardware filter lets it through.
+                    GateOutcome::NotACommand => {}
                 }
             }
             Err(CanRxError::Unsupported) => {}

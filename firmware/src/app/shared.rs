@@ -9,7 +9,7 @@ use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::blocking_mutex::Mutex;
 use embassy_sync::channel::Channel;
 use embassy_sync::signal::Signal;
-use monitor::acknowledge::{AckEvent, AckOutcome};
+use monitor::acknowledge::{AckEvent, AckResult};
 use monitor::device::alarm::AlarmOutput;
 use monitor::device::deadline::LoadReport;
 use monitor::protocol::outbox::Outbox;
@@ -68,7 +68,7 @@ pub struct CanStats {
 /// Acknowledge bookkeeping between the CAN receiver (which owns the
 /// challenge and checks the tag) and the estimator (which owns the latch).
 pub struct AckShared {
-    /// `AckOutcome::code` of the last attempt (0: none since boot).
+    /// `AckResult::code` of the last attempt (0: none since boot).
     pub last: AtomicU8,
     /// Attempts since boot (wrapping).
     pub attempts: AtomicU8,
@@ -79,8 +79,8 @@ pub struct AckShared {
 
 impl AckShared {
     /// The last attempt's outcome.
-    pub fn last(&self) -> Option<AckOutcome> {
-        AckOutcome::from_code(self.last.load(Ordering::Relaxed))
+    pub fn last(&self) -> Option<AckResult> {
+        AckResult::from_code(self.last.load(Ordering::Relaxed))
     }
 }
 

@@ -43,10 +43,10 @@ fn log_event(e: LogEvent) {
             )
         }
         LogEvent::AckAttempt(e) => match e.outcome {
-            monitor::acknowledge::AckOutcome::Accepted => {
+            monitor::acknowledge::AckResult::Accepted => {
                 defmt::warn!("{=u64} ms: acknowledge accepted", e.t_ms)
             }
-            monitor::acknowledge::AckOutcome::Rejected(r) => {
+            monitor::acknowledge::AckResult::Rejected(r) => {
                 defmt::warn!("{=u64} ms: acknowledge rejected: {}", e.t_ms, r)
             }
         },

@@ -119,16 +119,16 @@ pub enum AckRejected {
 /// The outcome of one acknowledge attempt.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum AckOutcome {
+pub enum AckResult {
     /// The latched alarm was cleared; the evidence period starts.
     Accepted,
     /// Nothing changed.
     Rejected(AckRejected),
 }
 
-impl AckOutcome {
+impl AckResult {
     /// Every outcome, in wire-code order (codes 1..; 0 is "none yet").
-    pub const ALL: [AckOutcome; 11] = [
+    pub const ALL: [AckResult; 11] = [
         Self::Accepted,
         Self::Rejected(AckRejected::NothingLatched),
         Self::Rejected(AckRejected::HoldOff),
@@ -184,7 +184,7 @@ pub struct AckEvent {
     /// When, ms on the sample clock.
     pub t_ms: u64,
     /// What came of it.
-    pub outcome: AckOutcome,
+    pub outcome: AckResult,
 }
 
 /// Where the policy stands.
@@ -253,7 +253,7 @@ impl AckPolicy {
     }
 
     /// An authentic acknowledge at `t_ms`; `latched`: a leak alarm is
-    /// latched now. On [`AckOutcome::Accepted`] the caller clears the
+    /// latched now. On [`AckResult::Accepted`] the caller clears the
     /// latch (and rotates the challenge).
     pub fn request(&mut self, t_ms: u64, latched: bool) -> AckEvent {
         let outcome = match self.decide(t_ms, latched) {
@@ -263,9 +263,9 @@ impl AckPolicy {
                     accepted_ms: t_ms,
                     healthy_since_ms: None,
                 };
-                AckOutcome::Accepted
+                AckResult::Accepted
             }
-            Err(r) => AckOutcome::Rejected(r),
+            Err(r) => AckResult::Rejected(r),
         };
         AckEvent { t_ms, outcome }
     }
@@ -296,7 +296,7 @@ impl AckPolicy {
     pub const fn rejected(t_ms: u64, reason: AckRejected) -> AckEvent {
         AckEvent {
             t_ms,
-            outcome: AckOutcome::Rejected(reason),
+            outcome: AckResult::Rejected(reason),
         }
     }
 
@@ -336,8 +336,8 @@ impl AckPolicy {
 mod tests {
     use super::*;
 
-    fn rejected(r: AckRejected) -> AckOutcome {
-        AckOutcome::Rejected(r)
+    fn rejected(r: AckRejected) -> AckResult {
+        AckResult::Rejected(r)
     }
 
     #[test]
@@ -362,7 +362,7 @@ mod tests {
             e,
             AckEvent {
                 t_ms: 15_000,
-                outcome: AckOutcome::Accepted
+                outcome: AckResult::Accepted
             }
         );
         assert!(!p.relay_permitted());
@@ -384,7 +384,7 @@ mod tests {
     fn a_repeated_acknowledge_inside_the_evidence_period_does_nothing() {
         let mut p = AckPolicy::default();
         p.raised(0);
-        assert_eq!(p.request(10_000, true).outcome, AckOutcome::Accepted);
+        assert_eq!(p.request(10_000, true).outcome, AckResult::Accepted);
         p.verdict(10_001, true);
         let before = p;
         // Even long after the rate limit, and even if something is
@@ -406,7 +406,7 @@ mod tests {
     fn at_most_one_accepted_per_interval_and_raising_again_restarts_the_hold_off() {
         let mut p = AckPolicy::default();
         p.raised(0);
-        assert_eq!(p.request(10_000, true).outcome, AckOutcome::Accepted);
+        assert_eq!(p.request(10_000, true).outcome, AckResult::Accepted);
         // The leak persists: raised again 2 s later; the evidence period
         // ends (the latch is back).
         p.raised(12_000);
@@ -423,7 +423,7 @@ mod tests {
             p.request(69_999, true).outcome,
             rejected(AckRejected::RateLimited)
         );
-        assert_eq!(p.request(70_000, true).outcome, AckOutcome::Accepted);
+        assert_eq!(p.request(70_000, true).outcome, AckResult::Accepted);
     }
 
     #[test]
@@ -440,7 +440,7 @@ mod tests {
                 latched = true;
                 p.raised(t);
             }
-            if p.request(t, latched).outcome == AckOutcome::Accepted {
+            if p.request(t, latched).outcome == AckResult::Accepted {
                 latched = false;
                 cleared_at = Some(t);
                 accepted.push(t).unwrap();
@@ -460,8 +460,8 @@ mod tests {
         let mut p = AckPolicy::default();
         p.raised(0);
         let before = p;
-        for o in AckOutcome::ALL {
-            if let AckOutcome::Rejected(r) = o {
+        for o in AckResult::ALL {
+            if let AckResult::Rejected(r) = o {
                 let e = AckPolicy::rejected(7, r);
                 assert_eq!(e.outcome, o);
                 assert_eq!(e.t_ms, 7);
@@ -472,15 +472,15 @@ mod tests {
 
     #[test]
     fn outcome_codes_round_trip() {
-        for (i, o) in AckOutcome::ALL.into_iter().enumerate() {
+        for (i, o) in AckResult::ALL.into_iter().enumerate() {
             assert_eq!(o.code(), i as u8 + 1);
-            assert_eq!(AckOutcome::from_code(o.code()), Some(o));
+            assert_eq!(AckResult::from_code(o.code()), Some(o));
         }
-        assert_eq!(AckOutcome::from_code(0), None);
-        assert_eq!(AckOutcome::from_code(12), None);
-        assert_eq!(AckOutcome::Accepted.name(), "accepted");
+        assert_eq!(AckResult::from_code(0), None);
+        assert_eq!(AckResult::from_code(12), None);
+        assert_eq!(AckResult::Accepted.name(), "accepted");
         assert_eq!(
-            AckOutcome::Rejected(AckRejected::StaleChallenge).name(),
+            AckResult::Rejected(AckRejected::StaleChallenge).name(),
             "stale_challenge"
         );
     }

@@ -11,9 +11,12 @@
 //!   per-boot seed (the caller's: the STM32's RNG on the board, a counter
 //!   in tests) and a running number through the keyed PRF, so the values
 //!   cannot be predicted without the key and a reboot does not repeat
-//!   them (given a fresh seed). The owner of the alarm latch rotates it
-//!   after every accepted acknowledge, when an alarm is raised, and at
-//!   the latest after [`CHALLENGE_LIFETIME_MS`].
+//!   them (given a fresh seed). Its owner (the firmware's CAN receive
+//!   task) rotates it after every authentic acknowledge frame, accepted by
+//!   the acknowledge policy or not (an answer is good once: a frame the
+//!   policy refused, e.g. during the hold-off, cannot be played again
+//!   later), when an alarm is raised, and at the latest after
+//!   [`CHALLENGE_LIFETIME_MS`].
 //! - **Tag**: the first [`MAC_LEN`] bytes (48 bits) of
 //!   HMAC-SHA256(key, "LM" ‖ 1 ‖ data ID ‖ command ‖ counter ‖ challenge)
 //!   ([`mac_message`]), carried in bytes 2..8 of the command frame. It
@@ -343,7 +346,7 @@ impl Challenger {
         self.n
     }
 
-    /// Issue a new challenge at `t_ms` (after an accepted acknowledge, a
+    /// Issue a new challenge at `t_ms` (after an authentic acknowledge, a
     /// raised alarm, or expiry). Responses to the old one are refused from
     /// now on. The new value always differs from the last two.
     pub fn rotate(&mut self, t_ms: u64) {

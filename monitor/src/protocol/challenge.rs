@@ -8,7 +8,7 @@
 //! | 1 | 0–3 | Counter | 0..=14 |
 //! | 1 | 4–7 | AckKey | 0 installation key, 1 development key (public: acknowledge unprotected) |
 //! | 2–5 | | Challenge | u32, the value the next acknowledge's tag must cover |
-//! | 6 | | AckResult | outcome of the last acknowledge attempt, 0 = none since boot (see [`AckOutcome`]) |
+//! | 6 | | AckResult | outcome of the last acknowledge attempt, 0 = none since boot (see [`AckResult`]) |
 //! | 7 | | AckAttempts | acknowledge attempts since boot, wrapping |
 //!
 //! A controller reads the challenge, sends `LM_Command` with the tag over
@@ -20,7 +20,7 @@ use super::auth::KeyKind;
 use super::bytes::{get_u16, put_u16};
 use super::signal::SignalList;
 use super::{FieldError, Signals};
-use crate::decision::acknowledge::AckOutcome;
+use crate::decision::acknowledge::AckResult;
 
 /// The challenge frame.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -31,7 +31,7 @@ pub struct ChallengeFrame {
     /// The current challenge.
     pub challenge: u32,
     /// The last acknowledge attempt's outcome (`None`: none since boot).
-    pub last_ack: Option<AckOutcome>,
+    pub last_ack: Option<AckResult>,
     /// Acknowledge attempts since boot (wrapping).
     pub ack_attempts: u8,
 }
@@ -41,7 +41,7 @@ impl ChallengeFrame {
         d[1] = (self.key as u8) << 4;
         put_u16(d, 2, self.challenge as u16);
         put_u16(d, 4, (self.challenge >> 16) as u16);
-        d[6] = self.last_ack.map_or(0, AckOutcome::code);
+        d[6] = self.last_ack.map_or(0, AckResult::code);
         d[7] = self.ack_attempts;
     }
 
@@ -52,7 +52,7 @@ impl ChallengeFrame {
         })?;
         let last_ack = match d[6] {
             0 => None,
-            code => Some(AckOutcome::from_code(code).ok_or(FieldError {
+            code => Some(AckResult::from_code(code).ok_or(FieldError {
                 field: "AckResult",
                 raw: code as u32,
             })?),
@@ -89,7 +89,7 @@ mod tests {
         let f = ChallengeFrame {
             key: KeyKind::Development,
             challenge: 0xA1B2_C3D4,
-            last_ack: Some(AckOutcome::Rejected(AckRejected::HoldOff)),
+            last_ack: Some(AckResult::Rejected(AckRejected::HoldOff)),
             ack_attempts: 200,
         };
         let mut d = [0u8; 8];
@@ -99,7 +99,7 @@ mod tests {
         assert_eq!(d[6], 3);
         assert_eq!(d[7], 200);
         assert_eq!(ChallengeFrame::read(&d), Ok(f));
-        for o in AckOutcome::ALL.map(Some).into_iter().chain([None]) {
+        for o in AckResult::ALL.map(Some).into_iter().chain([None]) {
             let g = ChallengeFrame { last_ack: o, ..f };
             g.write(&mut d);
             assert_eq!(ChallengeFrame::read(&d), Ok(g));

@@ -153,6 +153,12 @@ pub enum CommandRejected {
 }
 
 impl CommandRejected {
+    /// Was the frame's tag right (rejected after the tag check)? Its
+    /// challenge is then used up.
+    pub const fn tag_was_right(self) -> bool {
+        matches!(self, Self::Repeated { .. } | Self::ChannelInvalid)
+    }
+
     /// The acknowledge event's reason (`None`: not a command at all).
     pub const fn reason(self) -> Option<AckRejected> {
         Some(match self {

@@ -26,6 +26,7 @@ pub mod challenge;
 pub mod command;
 pub mod detail;
 pub mod e2e;
+pub mod gate;
 pub mod heartbeat;
 pub mod outbox;
 pub mod p01_receiver;

@@ -42,7 +42,7 @@ pub(crate) fn one_of_each() -> [Message; MessageKind::COUNT] {
         Message::Challenge(ChallengeFrame {
             key: auth::KeyKind::Development,
             challenge: 0x8765_4321,
-            last_ack: Some(crate::decision::acknowledge::AckOutcome::Accepted),
+            last_ack: Some(crate::decision::acknowledge::AckResult::Accepted),
             ack_attempts: 77,
         }),
         Message::Command(CommandFrame {
