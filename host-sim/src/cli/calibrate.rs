@@ -2,13 +2,15 @@
 //! recording of it.
 
 use anyhow::{Context, Result};
+use std::io::Write;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 #[derive(clap::Args)]
 pub struct Args {
     /// A recording of the installation known to be healthy (a minute or
-    /// more of holds and moves in both directions).
+    /// more of holds and moves in both directions; `-` reads standard
+    /// input).
     recording: PathBuf,
     /// Where to write the parameters (TOML).
     #[arg(short, long)]
@@ -28,20 +30,26 @@ pub fn run(a: Args) -> Result<ExitCode> {
     let cal = match host_sim::calibrate::calibrate(&samples, &start) {
         Ok(cal) => cal,
         Err(e) => {
-            // What was found up to the refusal, then the reason.
+            // What was found up to the refusal, then the reason: both
+            // diagnostics, on stderr (stdout stays empty on failure).
             if let Some(report) = e.report() {
-                print!("{report}");
+                eprint!("{report}");
             }
             return Err(e).with_context(|| format!("{}", a.recording.display()));
         }
     };
-    print!("{}", cal.summary());
+    // The report without warnings on stdout, the warnings on stderr.
+    write!(super::stdout(), "{}", cal.summary())?;
     for w in cal.warnings() {
         eprintln!("warning: {w}");
     }
     let text = cal.to_toml(&a.recording.display().to_string())?;
     std::fs::write(&a.output, text)
         .with_context(|| format!("{}: cannot write", a.output.display()))?;
-    println!("parameters written to {}", a.output.display());
+    writeln!(
+        super::stdout(),
+        "parameters written to {}",
+        a.output.display()
+    )?;
     Ok(ExitCode::SUCCESS)
 }

@@ -116,7 +116,7 @@ fn write_outputs(a: &Args, ev: &eval::Evaluation) -> Result<()> {
     match &a.output {
         Some(path) => std::fs::write(path, report)
             .with_context(|| format!("{}: cannot write", path.display()))?,
-        None => print!("{report}"),
+        None => super::stdout().write_all(report.as_bytes())?,
     }
     Ok(())
 }

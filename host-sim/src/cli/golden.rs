@@ -3,6 +3,7 @@
 
 use anyhow::Result;
 use clap::Subcommand;
+use std::io::Write;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -67,16 +68,18 @@ pub fn run(action: Action) -> Result<ExitCode> {
             let case = golden::generate(std::path::Path::new("."), &spec)?;
             golden::write(&output, &case)?;
             let name = output.file_name().map(|n| n.to_string_lossy().into_owned());
-            println!(
+            writeln!(
+                super::stdout(),
                 "{}",
                 golden::summary(&name.unwrap_or_default(), &spec, &case)
-            );
+            )?;
             Ok(ExitCode::SUCCESS)
         }
         Action::Check { dir, root } => {
             let stale = golden::check(&dir, &root)?;
             if stale.is_empty() {
-                println!("golden cases in {} are up to date", dir.display());
+                let dir = dir.display();
+                writeln!(super::stdout(), "golden cases in {dir} are up to date")?;
                 Ok(ExitCode::SUCCESS)
             } else {
                 for s in &stale {
@@ -87,7 +90,7 @@ pub fn run(action: Action) -> Result<ExitCode> {
             }
         }
         Action::Show { prefix, sample } => {
-            print!("{}", golden::show(&prefix, sample)?);
+            write!(super::stdout(), "{}", golden::show(&prefix, sample)?)?;
             Ok(ExitCode::SUCCESS)
         }
     }

@@ -3,6 +3,7 @@
 
 mod calibrate;
 mod decode;
+mod docs;
 mod eval;
 mod golden;
 mod plot;
@@ -12,6 +13,10 @@ mod simulate;
 use anyhow::Result;
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
+
+/// Exit status of an error (unreadable input, bad options); `decode
+/// --strict` uses 1 for protocol errors found in a readable log.
+const EXIT_ERROR: u8 = 2;
 
 #[derive(Parser)]
 #[command(
@@ -44,23 +49,50 @@ enum Command {
     /// (`candump -l`: `(sec.usec) iface id#hex`), checking every frame's
     /// CRC and counter.
     Decode(decode::Args),
+    /// Shell completions (bash, zsh, fish, elvish, powershell) on stdout.
+    Completions(docs::CompletionArgs),
+    /// The manual page (roff) on stdout: `host-sim man > host-sim.1`.
+    Man,
     /// Golden cases for the on-target tests in QEMU (`tests/golden/data`;
-    /// regenerate them all with `scripts/golden.sh`).
+    /// regenerate them all with `scripts/golden.sh`). Developer only.
+    #[command(hide = true)]
     Golden {
         #[command(subcommand)]
         action: golden::Action,
     },
 }
 
-/// Parse the command line, run it, report an error on stderr.
+/// Parse the command line, run it, report an error on stderr. A closed
+/// pipe on stdout (`host-sim replay … | head -1`) ends the program quietly
+/// with status 0, as for any reader that has seen enough.
 pub fn main() -> ExitCode {
     match run(Cli::parse()) {
         Ok(code) => code,
+        Err(e) if is_broken_pipe(&e) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e:#}");
-            ExitCode::from(2)
+            report(&e);
+            ExitCode::from(EXIT_ERROR)
         }
     }
+}
+
+/// Print an error and its causes on stderr, each once.
+fn report(e: &anyhow::Error) {
+    eprintln!("error: {e:#}");
+}
+
+/// Did writing to stdout fail because the reader went away?
+fn is_broken_pipe(e: &anyhow::Error) -> bool {
+    e.chain().any(|c| {
+        c.downcast_ref::<std::io::Error>()
+            .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+    })
+}
+
+/// Standard output for a subcommand's results: every write is checked (a
+/// closed pipe ends the program quietly, see [`main`]).
+fn stdout() -> std::io::StdoutLock<'static> {
+    std::io::stdout().lock()
 }
 
 fn run(cli: Cli) -> Result<ExitCode> {
@@ -71,6 +103,8 @@ fn run(cli: Cli) -> Result<ExitCode> {
         Command::Simulate(a) => simulate::run(a),
         Command::Eval(a) => eval::run(a),
         Command::Decode(a) => decode::run(a),
+        Command::Completions(a) => docs::completions(a),
+        Command::Man => docs::man(),
         Command::Golden { action } => golden::run(action),
     }
 }

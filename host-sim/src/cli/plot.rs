@@ -3,12 +3,14 @@
 use anyhow::Result;
 use host_sim::recording::RecordingReader;
 use host_sim::replay::replay;
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// Recording (CSV per `recording-csv.md`, optionally gzipped).
+    /// Recording (CSV per `docs/recording-format.md`, optionally gzipped;
+    /// `-` reads standard input).
     recording: PathBuf,
     /// Output SVG [default: the recording's name with `.svg`, in the
     /// current directory].
@@ -27,19 +29,22 @@ pub fn run(a: Args) -> Result<ExitCode> {
     let name = a.recording.display().to_string();
     let summary = replay::<f32, _>(reader, &name, &params, &mut obs)?;
     host_sim::plot::write_svg(&output, &summary, &obs, &params)?;
-    println!(
+    writeln!(
+        super::stdout(),
         "{}: verdict {}; plot written to {}",
         name,
         summary.verdict,
         output.display()
-    );
+    )?;
     Ok(ExitCode::SUCCESS)
 }
 
-/// `run.csv.gz` → `run.svg` in the current directory.
+/// `run.csv.gz` → `run.svg` in the current directory (`recording.svg`
+/// for standard input).
 fn default_plot_path(recording: &Path) -> PathBuf {
-    let name = recording
-        .file_name()
+    let name = Some(recording)
+        .filter(|r| r.as_os_str() != "-")
+        .and_then(Path::file_name)
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_else(|| "recording".into());
     let stem = name

@@ -10,14 +10,17 @@ use std::process::ExitCode;
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// Recordings (CSV per `recording-csv.md`, optionally gzipped). With
-    /// `--json`, one JSON object per recording, one per line.
+    /// Recordings (CSV per `docs/recording-format.md`, optionally gzipped;
+    /// `-` reads standard input). With `--json`, one JSON object per
+    /// recording, one per line. A recording that cannot be read is
+    /// reported on stderr and the others are still replayed; the exit
+    /// status is then 2. Limits: lines of 64 KiB, 16 GiB of text.
     #[arg(required = true)]
     recordings: Vec<PathBuf>,
     /// Installation parameters (TOML, e.g. from `calibrate`).
     #[arg(long)]
     params: Option<PathBuf>,
-    /// Print exactly one JSON object (`host-sim-cli.md`).
+    /// Print exactly one JSON object per recording (`docs/cli.md`).
     #[arg(long)]
     json: bool,
     /// Write a per-sample trace of the monitor's status to this CSV.
@@ -37,17 +40,33 @@ pub fn run(a: Args) -> Result<ExitCode> {
         a.trace.is_none() || a.recordings.len() == 1,
         "--trace takes a single recording"
     );
-    for (i, recording) in a.recordings.iter().enumerate() {
-        if i > 0 && !a.json {
-            println!();
+    let mut failed = 0;
+    let mut printed = 0;
+    for recording in &a.recordings {
+        match replay_one(recording, &params, &a, printed > 0) {
+            Ok(()) => printed += 1,
+            Err(e) if super::is_broken_pipe(&e) => return Err(e),
+            Err(e) => {
+                super::report(&e);
+                failed += 1;
+            }
         }
-        replay_one(recording, &params, &a)?;
     }
-    Ok(ExitCode::SUCCESS)
+    if failed == 0 {
+        return Ok(ExitCode::SUCCESS);
+    }
+    if a.recordings.len() > 1 {
+        eprintln!(
+            "error: {failed} of {} recordings could not be replayed",
+            a.recordings.len()
+        );
+    }
+    Ok(ExitCode::from(super::EXIT_ERROR))
 }
 
-/// Replay one recording and print its summary.
-fn replay_one(recording: &Path, params: &Params, a: &Args) -> Result<()> {
+/// Replay one recording and print its summary (after a blank line if
+/// `separate` and the output is for people).
+fn replay_one(recording: &Path, params: &Params, a: &Args, separate: bool) -> Result<()> {
     let reader = RecordingReader::open(recording)?;
     let name = recording.display().to_string();
     let start = std::time::Instant::now();
@@ -66,7 +85,10 @@ fn replay_one(recording: &Path, params: &Params, a: &Args) -> Result<()> {
         None => replay::<f32, _>(reader, &name, params, &mut ())?,
     };
     let elapsed = start.elapsed().as_secs_f64();
-    let mut out = std::io::stdout().lock();
+    let mut out = super::stdout();
+    if separate && !a.json {
+        writeln!(out)?;
+    }
     if a.json {
         serde_json::to_writer(&mut out, &summary)?;
         writeln!(out)?;
@@ -78,5 +100,6 @@ fn replay_one(recording: &Path, params: &Params, a: &Args) -> Result<()> {
             summary.samples as f64 / elapsed.max(1e-9)
         )?;
     }
+    out.flush()?;
     Ok(())
 }
