@@ -110,6 +110,9 @@ fn a_closed_pipe_ends_quietly_with_status_0() {
         vec!["replay", s(&a), s(&a)],
         vec!["replay", "--json", s(&a)],
         vec!["decode", s(&log)],
+        vec!["decode", "--json", s(&log)],
+        vec!["completions", "bash"],
+        vec!["man"],
         vec!["golden", "--help"],
     ] {
         let out = with_closed_stdout(&args);
