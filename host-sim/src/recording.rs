@@ -74,6 +74,16 @@ pub enum RecordingError {
         /// The value as found.
         value: String,
     },
+    /// More `# key=value` lines than the reader keeps.
+    #[error("{file}:{line}: more than {limit} metadata lines (`# key=value`) before the header")]
+    TooMuchMetadata {
+        /// File name.
+        file: String,
+        /// Line number.
+        line: u64,
+        /// The limit.
+        limit: usize,
+    },
     /// The header is not followed by any sample.
     #[error("{file}:{line}: no samples after the header (a recording needs at least one row)")]
     NoSamples {
@@ -209,6 +219,9 @@ pub enum RecordingError {
         message: String,
     },
 }
+
+/// Most `# key=value` lines a recording may have.
+pub const MAX_METADATA: usize = 1024;
 
 /// Lowest plausible `# sample_rate_hz=`, Hz.
 pub const MIN_SAMPLE_RATE_HZ: f64 = 10.0;

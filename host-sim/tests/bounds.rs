@@ -143,6 +143,14 @@ fn an_unclosed_quote_cannot_make_a_huge_record() {
 }
 
 #[test]
+fn metadata_lines_are_limited() {
+    let dir = tempfile::tempdir().unwrap();
+    let body = format!("{}{HEADER}{ROW0}", "# note=x\n".repeat(5000));
+    let p = write(dir.path(), "meta.csv", body.as_bytes());
+    assert_refused(&p, &["meta.csv:1025:", "more than 1024 metadata lines"]);
+}
+
+#[test]
 fn decompressed_size_is_limited() {
     use host_sim::recording::{Limits, RecordingReader};
     let mut body = String::from(HEADER);

@@ -1,7 +1,9 @@
 //! The top of a recording: `#` metadata lines and the header.
 
 use super::bounded::{self, Limits};
-use super::{io_error, Columns, RecordingError, MAX_SAMPLE_RATE_HZ, MIN_SAMPLE_RATE_HZ};
+use super::{
+    io_error, Columns, RecordingError, MAX_METADATA, MAX_SAMPLE_RATE_HZ, MIN_SAMPLE_RATE_HZ,
+};
 use monitor::Channel;
 use std::io::BufRead;
 
@@ -52,6 +54,13 @@ pub(super) fn read_top(
         if let Some(rest) = text.strip_prefix('#') {
             if let Some((k, v)) = rest.trim_start().split_once('=') {
                 if !k.contains(' ') {
+                    if metadata.len() == MAX_METADATA {
+                        return Err(RecordingError::TooMuchMetadata {
+                            file: file.into(),
+                            line: line_no,
+                            limit: MAX_METADATA,
+                        });
+                    }
                     check_metadata(file, line_no, k, v)?;
                     metadata.push((k.to_string(), v.to_string()));
                 }
