@@ -81,9 +81,9 @@ fn decodes_and_flags_crc_errors_and_counter_jumps() {
         "{}",
         lines[1]
     );
-    assert!(
-        lines[1].contains("Verdict=internal LeakInternal=0.385 l/min LeakExternal=n/a Health=64")
-    );
+    assert!(lines[1].contains(
+        "Verdict=internal LeakInternal=0.385 l/min LeakExternal=n/a Health=ALARM_LATCHED"
+    ));
     assert!(lines[3].contains("BAD CRC"), "{}", lines[3]);
     assert!(lines[4].contains("COUNTER JUMP (2 lost)"), "{}", lines[4]);
     assert!(lines[4].contains("LeakInternal=0.389 l/min"));
