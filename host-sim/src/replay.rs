@@ -99,7 +99,8 @@ pub struct ReplaySummary {
     /// Mean NIS of the leading hypothesis over the samples after the
     /// warm-up (≈ 3 when the filters are consistent with the data).
     pub mean_nis: Option<f64>,
-    /// Events after the first [`MAX_EVENTS`], counted but not kept in
+    /// Events after the first [`MAX_EVENTS`] (alarms: after twice that),
+    /// counted but not kept in
     /// `events` (a recording of endless gaps or faults stays bounded).
     pub events_dropped: u64,
 }
@@ -296,7 +297,12 @@ pub fn replay<T: Real, R: BufRead>(
             if matches!(e, Event::AlarmRaised(_)) && summary.first_alarm_s.is_none() {
                 summary.first_alarm_s = Some(sample.t_s);
             }
-            if summary.events.len() < MAX_EVENTS {
+            // Alarms are kept past the cap (the contract lists every
+            // alarm); they latch, so there are few, and a second cap still
+            // bounds the list.
+            let alarm = matches!(e, Event::AlarmRaised(_) | Event::AlarmCleared);
+            let room = if alarm { 2 * MAX_EVENTS } else { MAX_EVENTS };
+            if summary.events.len() < room {
                 summary.events.push(EventRecord::new(sample.t_s, e));
             } else {
                 summary.events_dropped += 1;

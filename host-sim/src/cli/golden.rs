@@ -19,11 +19,11 @@ pub enum Action {
         /// Number of samples from the start.
         #[arg(long)]
         samples: u32,
-        /// Filter warm-up, s (nominal: 10 s; shorter reaches the
+        /// Filter warm-up, s (nominal: 2 s; shorter reaches the
         /// decision layer's evidence phase in a short case).
         #[arg(long, default_value_t = monitor::Params::NOMINAL.filter.warm_up_s)]
         warm_up: f64,
-        /// Output prefix, e.g. tests/golden/data/healthy.
+        /// Output prefix, e.g. golden/data/healthy.
         #[arg(short, long)]
         output: PathBuf,
     },
@@ -39,7 +39,7 @@ pub enum Action {
     /// Print the host's status and filter states at one sample of a case,
     /// in the format a failing QEMU test prints.
     Show {
-        /// Case prefix, e.g. tests/golden/data/both.
+        /// Case prefix, e.g. golden/data/both.
         prefix: PathBuf,
         /// Sample index (0-based).
         #[arg(long)]

@@ -53,7 +53,7 @@ enum Command {
     Completions(docs::CompletionArgs),
     /// The manual page (roff) on stdout: `host-sim man > host-sim.1`.
     Man,
-    /// Golden cases for the on-target tests in QEMU (`tests/golden/data`;
+    /// Golden cases for the on-target tests in QEMU (`golden/data`;
     /// regenerate them all with `scripts/golden.sh`). Developer only.
     #[command(hide = true)]
     Golden {
