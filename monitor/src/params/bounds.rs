@@ -203,15 +203,49 @@ impl fmt::Display for Num {
     }
 }
 
-/// `value unit`, or `value` for a dimensionless figure.
-struct WithUnit(f64, &'static str);
+/// A derived figure (a load, a limit computed from other fields) to six
+/// significant digits: `2608450`, not `2608453.4725421863`.
+pub(crate) struct Sig(pub f64);
 
-impl fmt::Display for WithUnit {
+impl fmt::Display for Sig {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        use core::fmt::Write;
+        let v = self.0;
+        let a = v.abs();
+        if !v.is_finite() || v == 0.0 {
+            return write!(f, "{v}");
+        }
+        let mut text = heapless::String::<48>::new();
+        if (1e-4..1e7).contains(&a) {
+            let e = libm::floor(libm::log10(a)) as i32;
+            let decimals = (5 - e).max(0) as usize;
+            write!(text, "{v:.decimals$}")?;
+        } else {
+            write!(text, "{v:.5e}")?;
+        }
+        let (mantissa, exponent) = match text.find('e') {
+            Some(k) => text.split_at(k),
+            None => (text.as_str(), ""),
+        };
+        let mantissa = if mantissa.contains('.') {
+            mantissa.trim_end_matches('0').trim_end_matches('.')
+        } else {
+            mantissa
+        };
+        write!(f, "{mantissa}{exponent}")
+    }
+}
+
+/// `value unit`, or `value` for a dimensionless figure: as given
+/// (`Num`) or derived (`Sig`).
+struct WithUnit<N>(N, &'static str);
+
+impl<N: fmt::Display> fmt::Display for WithUnit<N> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         if self.1.is_empty() {
-            write!(f, "{}", Num(self.0))
+            write!(f, "{}", self.0)
         } else {
-            write!(f, "{} {}", Num(self.0), self.1)
+            write!(f, "{} {}", self.0, self.1)
         }
     }
 }
@@ -234,14 +268,14 @@ impl fmt::Display for ParamError {
                     " = {} {what} {} … {}",
                     Num(self.value),
                     Num(min),
-                    WithUnit(max, unit)
+                    WithUnit(Num(max), unit)
                 )
             }
             Problem::Relation { rule, limit, unit } => write!(
                 f,
                 " = {} {rule} {}",
-                WithUnit(self.value, unit),
-                WithUnit(limit, unit)
+                WithUnit(Num(self.value), unit),
+                WithUnit(Sig(limit), unit)
             ),
             Problem::RodTurn {
                 rods,
@@ -251,7 +285,7 @@ impl fmt::Display for ParamError {
                 f,
                 ": turns rods {rods} by {}° over the stroke of {} m (cylinder.stroke_m); \
                  at most {}°",
-                Num(self.value),
+                Sig(self.value),
                 Num(stroke_m),
                 Num(max_deg)
             ),
@@ -265,10 +299,10 @@ impl fmt::Display for ParamError {
                 f,
                 ": the [load] model (masses, inertias, lever lengths, angle fits, scales, \
                  force offset) gives {what} {} at piston position {} m; plausible {} … {}",
-                WithUnit(self.value, unit),
-                Num(x_m),
-                Num(min),
-                WithUnit(max, unit)
+                WithUnit(Sig(self.value), unit),
+                Sig(x_m),
+                Sig(min),
+                WithUnit(Sig(max), unit)
             ),
         }
     }

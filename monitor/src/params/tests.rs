@@ -243,3 +243,20 @@ fn load_geometry_must_be_buildable_over_the_stroke() {
     let e = p.validate().unwrap_err();
     assert!(std::format!("{e}").contains("effective moving mass"), "{e}");
 }
+
+#[test]
+fn figures_read_well() {
+    use bounds::{Num, Sig};
+    let s = |x: f64| std::format!("{}", Sig(x));
+    assert_eq!(s(2_608_453.472_542_186_3), "2608453");
+    assert_eq!(s(124_680.0), "124680");
+    assert_eq!(s(0.499_729_13), "0.499729");
+    assert_eq!(s(0.3), "0.3");
+    assert_eq!(s(-1.234_567e30), "-1.23457e30");
+    assert_eq!(s(2.5e-7), "2.5e-7");
+    let n = |x: f64| std::format!("{}", Num(x));
+    assert_eq!(n(1e30), "1e30");
+    assert_eq!(n(0.003117), "0.003117");
+    assert_eq!(n(-350.0), "-350");
+    assert_eq!(n(f64::NAN), "NaN");
+}
