@@ -36,8 +36,8 @@ pub enum LogEvent {
     Acknowledged {
         /// Sample time, ms.
         t_ms: u64,
-        /// Whether a leak was latched.
-        was_latched: bool,
+        /// What became of it.
+        outcome: monitor::AckOutcome,
     },
     /// ADC data was lost.
     Overrun {

@@ -150,7 +150,7 @@ impl Frontend {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::{Monitor, Params, Verdict};
 
@@ -180,7 +180,7 @@ mod tests {
         units_per_volt: 0.1,
     };
 
-    fn config(temp: Input) -> FrontendConfig {
+    pub(crate) fn config(temp: Input) -> FrontendConfig {
         FrontendConfig {
             adc: ADC,
             inputs: [
