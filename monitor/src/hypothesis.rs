@@ -23,12 +23,7 @@ impl Hypothesis {
 
     /// The leaks its model contains (same code as the hypothesis).
     pub const fn leaks(self) -> LeakSet {
-        match self {
-            Self::Healthy => LeakSet::NONE,
-            Self::Internal => LeakSet::INTERNAL,
-            Self::External => LeakSet::EXTERNAL,
-            Self::Both => LeakSet::BOTH,
-        }
+        LeakSet::from_bits(self as u8)
     }
 
     /// Lower-case name, as in the replay JSON.

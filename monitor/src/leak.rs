@@ -11,9 +11,9 @@ use core::ops::{Index, IndexMut};
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Leak {
     /// Across the piston seal, piston chamber → rod chamber.
-    Internal,
+    Internal = 0,
     /// From the rod-side line to tank (e.g. across the valve).
-    External,
+    External = 1,
 }
 
 impl Leak {
@@ -67,6 +67,12 @@ impl LeakSet {
         Self(internal as u8 | (external as u8) << 1)
     }
 
+    /// The set of the low two bits of `bits` (bit 0 internal, bit 1
+    /// external): for the types that share its codes.
+    pub(crate) const fn from_bits(bits: u8) -> Self {
+        Self(bits & 3)
+    }
+
     /// Wire code, 0..=3.
     pub const fn code(self) -> u8 {
         self.0
@@ -112,63 +118,71 @@ impl LeakSet {
     }
 }
 
-/// One value per leak.
+/// One value per leak, indexed by [`Leak`] (stored as a two-element
+/// array, so indexing costs what `[T; 2]` indexing did).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
-pub struct PerLeak<T> {
-    /// For the internal leak.
-    pub internal: T,
-    /// For the external leak.
-    pub external: T,
-}
+pub struct PerLeak<T>([T; 2]);
 
 impl<T> PerLeak<T> {
     /// `internal`, `external`.
     pub const fn new(internal: T, external: T) -> Self {
-        Self { internal, external }
+        Self([internal, external])
     }
 
     /// The same value for both leaks.
-    pub fn splat(v: T) -> Self
+    pub const fn splat(v: T) -> Self
     where
         T: Copy,
     {
-        Self::new(v, v)
+        Self([v, v])
+    }
+
+    /// The internal leak's value.
+    pub fn internal(self) -> T
+    where
+        T: Copy,
+    {
+        self.0[0]
+    }
+
+    /// The external leak's value.
+    pub fn external(self) -> T
+    where
+        T: Copy,
+    {
+        self.0[1]
     }
 
     /// `f` applied to each value.
-    pub fn map<U>(self, mut f: impl FnMut(T) -> U) -> PerLeak<U> {
-        PerLeak::new(f(self.internal), f(self.external))
+    pub fn map<U>(self, f: impl FnMut(T) -> U) -> PerLeak<U> {
+        PerLeak(self.0.map(f))
     }
 
     /// `f` applied to each leak.
     pub fn from_fn(mut f: impl FnMut(Leak) -> T) -> Self {
-        Self::new(f(Leak::Internal), f(Leak::External))
+        Self([f(Leak::Internal), f(Leak::External)])
     }
 }
 
 impl PerLeak<bool> {
     /// The leaks whose value is true.
     pub const fn set(self) -> LeakSet {
-        LeakSet::of(self.internal, self.external)
+        LeakSet::of(self.0[0], self.0[1])
     }
 }
 
 impl<T> Index<Leak> for PerLeak<T> {
     type Output = T;
+    #[inline(always)]
     fn index(&self, leak: Leak) -> &T {
-        match leak {
-            Leak::Internal => &self.internal,
-            Leak::External => &self.external,
-        }
+        &self.0[leak as usize]
     }
 }
 
 impl<T> IndexMut<Leak> for PerLeak<T> {
+    #[inline(always)]
     fn index_mut(&mut self, leak: Leak) -> &mut T {
-        match leak {
-            Leak::Internal => &mut self.internal,
-            Leak::External => &mut self.external,
-        }
+        &mut self.0[leak as usize]
     }
 }
 
@@ -199,7 +213,7 @@ mod tests {
     fn per_leak_is_indexed_by_leak() {
         let mut p = PerLeak::new(1, 2);
         p[Leak::External] += 10;
-        assert_eq!((p[Leak::Internal], p.external), (1, 12));
+        assert_eq!((p[Leak::Internal], p.external()), (1, 12));
         assert_eq!(
             PerLeak::from_fn(|l| l == Leak::External).set(),
             LeakSet::EXTERNAL

@@ -285,8 +285,8 @@ impl<T: Real> Decision<T> {
                 follow(&mut self.baseline_now[k], a_base, self.baseline[k][region]);
             }
             let flows = PerLeak::new(
-                both.flow_internal_lpm - self.baseline_now.internal * both.dp_10bar[0],
-                both.flow_external_lpm - self.baseline_now.external * both.dp_10bar[1],
+                both.flow_internal_lpm - self.baseline_now[Leak::Internal] * both.dp_10bar[0],
+                both.flow_external_lpm - self.baseline_now[Leak::External] * both.dp_10bar[1],
             );
             let sds = PerLeak::new(both.flow_internal_sd_lpm, both.flow_external_sd_lpm);
             for k in Leak::ALL {
@@ -421,9 +421,11 @@ impl<T: Real> Decision<T> {
     /// averages over the evidence window, never negative (an estimate
     /// below the healthy baseline is no leak).
     pub fn leak_flows(&self) -> (PerLeak<f32>, PerLeak<f32>) {
+        let size = |k: Leak| self.slow[k].max(T::ZERO).to_f32();
+        let sd = |k: Leak| self.slow_sd[k].to_f32();
         (
-            self.slow.map(|v| v.max(T::ZERO).to_f32()),
-            self.slow_sd.map(T::to_f32),
+            PerLeak::new(size(Leak::Internal), size(Leak::External)),
+            PerLeak::new(sd(Leak::Internal), sd(Leak::External)),
         )
     }
 
@@ -436,7 +438,8 @@ impl<T: Real> Decision<T> {
     /// The fast (detection) averages of the leak flows, l/min, never
     /// negative.
     pub fn detection_flows(&self) -> PerLeak<f32> {
-        self.fast.map(|v| v.max(T::ZERO).to_f32())
+        let flow = |k: Leak| self.fast[k].max(T::ZERO).to_f32();
+        PerLeak::new(flow(Leak::Internal), flow(Leak::External))
     }
 
     /// Evidence per hypothesis.
