@@ -72,7 +72,8 @@ pub async fn run<S: SampleSource, R: RelayOutput, C: CycleCounter>(
             shared.log(LogEvent::Overrun { t_ms, lost });
         }
         if let Some(outcome) = out.acknowledged {
-            shared.log(LogEvent::Acknowledged { t_ms, outcome });
+            let was_latched = outcome.cleared_a_leak();
+            shared.log(LogEvent::Acknowledged { t_ms, was_latched });
         }
         for &event in out.status.events.iter() {
             shared.log(LogEvent::Monitor { t_ms, event });

@@ -36,8 +36,8 @@ pub enum LogEvent {
     Acknowledged {
         /// Sample time, ms.
         t_ms: u64,
-        /// What became of it.
-        outcome: monitor::AckOutcome,
+        /// Whether it cleared a latched leak.
+        was_latched: bool,
     },
     /// ADC data was lost.
     Overrun {

@@ -36,8 +36,12 @@ fn log_event(e: LogEvent) {
                 "off"
             }
         ),
-        LogEvent::Acknowledged { t_ms, outcome } => {
-            defmt::info!("{=u64} ms: alarm acknowledge: {}", t_ms, outcome)
+        LogEvent::Acknowledged { t_ms, was_latched } => {
+            defmt::info!(
+                "{=u64} ms: alarm acknowledged (latched: {})",
+                t_ms,
+                was_latched
+            )
         }
         LogEvent::Overrun { t_ms, lost } => {
             defmt::warn!("{=u64} ms: ADC overrun, {} samples lost", t_ms, lost)
