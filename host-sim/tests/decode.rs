@@ -2,8 +2,9 @@
 //! encoder: decoded values, flagged CRC errors and counter jumps, strict
 //! exit status, malformed lines.
 
-use monitor::device::alarm::{AlarmState, LeakKind};
+use monitor::device::alarm::AlarmState;
 use monitor::protocol::{AlarmFrame, CanFrame, Encoder, Message, StatusFrame};
+use monitor::LeakSet;
 use monitor::Verdict;
 use std::path::Path;
 use std::process::{Command, Output};
@@ -39,7 +40,7 @@ fn write_log(dir: &Path) -> std::path::PathBuf {
     let mut log = String::from("# a candump log\n");
     let alarm = Message::Alarm(AlarmFrame {
         state: AlarmState::Leak,
-        latched: LeakKind::Internal,
+        latched: LeakSet::INTERNAL,
         relay_energised: false,
         faulted_channels: 0,
         changed_at_ms: 12_345,

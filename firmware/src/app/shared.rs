@@ -36,7 +36,7 @@ pub enum LogEvent {
     Acknowledged {
         /// Sample time, ms.
         t_ms: u64,
-        /// Whether a leak was latched.
+        /// Whether it cleared a latched leak.
         was_latched: bool,
     },
     /// ADC data was lost.
