@@ -20,7 +20,7 @@ use firmware::app;
 use firmware::app::shared::Shared;
 use firmware::board::BootInfo;
 use firmware::board_map::{self, Board, FRONTEND};
-use monitor::Monitor;
+use monitor::device::Estimator;
 use static_cell::StaticCell;
 use stm32::adc::AdcSampler;
 use stm32::can::{Receiver, Transmitter};
@@ -38,7 +38,7 @@ mod installation {
 
 static SHARED: Shared = Shared::new();
 static RELAY: StaticCell<Relay> = StaticCell::new();
-static MONITOR: StaticCell<Monitor<f32>> = StaticCell::new();
+static ESTIMATOR: StaticCell<Estimator<f32>> = StaticCell::new();
 static EXECUTOR_HIGH: InterruptExecutor = InterruptExecutor::new();
 static EXECUTOR_LOW: StaticCell<Executor> = StaticCell::new();
 
@@ -57,10 +57,10 @@ async fn estimator(
     source: AdcSampler,
     relay: &'static Relay,
     cycles: Dwt,
-    monitor: &'static mut Monitor<f32>,
+    estimator: &'static mut Estimator<f32>,
     boot: BootInfo,
 ) {
-    app::estimator::run(source, relay, cycles, monitor, FRONTEND, boot, &SHARED).await
+    app::estimator::run(source, relay, cycles, estimator, boot, &SHARED).await
 }
 
 #[embassy_executor::task]
@@ -137,8 +137,8 @@ fn start(spawner: Spawner) {
         "installation parameters: {}",
         installation::INSTALLATION_SOURCE
     );
-    let monitor = match Monitor::new(&installation::INSTALLATION) {
-        Ok(m) => MONITOR.init(m),
+    let pipeline = match app::estimator::pipeline::<Dwt>(&installation::INSTALLATION, FRONTEND) {
+        Ok(e) => ESTIMATOR.init(e),
         // Validated at build time (build.rs); kept as a last line of defence.
         Err(e) => defmt::panic!("invalid built-in parameters: {}", e.field),
     };
@@ -152,7 +152,7 @@ fn start(spawner: Spawner) {
 
     interrupt::UART4.set_priority(ESTIMATOR_PRIORITY);
     let high = EXECUTOR_HIGH.start(interrupt::UART4);
-    high.spawn(unwrap!(estimator(source, relay, cycles, monitor, boot)));
+    high.spawn(unwrap!(estimator(source, relay, cycles, pipeline, boot)));
 
     spawner.spawn(unwrap!(supervisor(watchdog, relay, Led::new(led))));
     spawner.spawn(unwrap!(can_start(spawner, can, can_rx, can_tx, seed)));

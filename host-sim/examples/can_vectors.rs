@@ -9,12 +9,13 @@
 //! `cargo run -p host-sim --example can_vectors`
 
 use monitor::acknowledge::AckResult;
-use monitor::device::alarm::{AlarmState, LeakKind};
+use monitor::device::alarm::AlarmState;
 use monitor::protocol::auth::{acknowledge_frame, AckKey, KeyKind, DEVELOPMENT_KEY};
 use monitor::protocol::{
     AlarmFrame, CanFrame, ChallengeFrame, Decoder, DetailFrame, Encoder, HeartbeatFrame, Message,
     ResetCause, StatusFrame,
 };
+use monitor::LeakSet;
 use monitor::{Hypothesis, Verdict};
 use std::collections::BTreeMap;
 use std::io::Write;
@@ -48,7 +49,7 @@ fn messages() -> Vec<Message> {
         }));
         v.push(Message::Alarm(AlarmFrame {
             state: AlarmState::ALL[i as usize % 6],
-            latched: LeakKind::ALL[i as usize % 4],
+            latched: LeakSet::ALL[i as usize % 4],
             relay_energised: i % 3 == 0,
             faulted_channels: (i as u8).wrapping_mul(37),
             changed_at_ms: (i as u32).wrapping_mul(0x2468_ACE1),

@@ -2,13 +2,57 @@
 //! (`candump -l`, lines `(sec.usec) iface id#hex`), decoded with the same
 //! protocol code the firmware encodes with. Every frame's E2E protection
 //! is checked: bad CRCs, invalid counters, counter jumps (lost frames) and
-//! repeated counters are flagged.
+//! repeated counters are flagged. Lines are read with a length limit;
+//! CAN error frames, CAN FD and CAN XL frames and odd DLCs are skipped and
+//! counted (an error with `--strict`). Output is flushed after every
+//! frame, so `candump -L can0 | host-sim decode -` is live.
 
-use anyhow::{bail, Context, Result};
-use monitor::protocol::{DecodeError, Decoder, E2eError, MessageKind, Received, Sequence};
+use crate::recording::bounded::{read_line, Exceeded};
+use anyhow::{anyhow, bail, Result};
+use monitor::protocol::{
+    DecodeError, Decoder, E2eError, MessageKind, Received, Sequence, Signal, SignalValue,
+};
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::io::{BufRead, Write};
+
+/// Longest line of a candump log, bytes (a CAN XL line is under 5 KiB).
+pub const MAX_LINE_BYTES: u64 = 64 * 1024;
+
+/// A line that holds a frame the monitor never sends, skipped.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Skip {
+    /// A CAN error frame (identifier with the error flag, `20000080#…`).
+    ErrorFrame,
+    /// A CAN FD frame (`id##flags data`).
+    CanFd,
+    /// A CAN XL frame (`prio#flags:sdt:af#data`).
+    CanXl,
+    /// A classic frame with a DLC above 8 (`_9` … `_F` suffix, or more
+    /// than 8 data bytes).
+    OddDlc,
+}
+
+impl Skip {
+    /// For messages.
+    pub fn describe(self) -> &'static str {
+        match self {
+            Self::ErrorFrame => "CAN error frame",
+            Self::CanFd => "CAN FD frame",
+            Self::CanXl => "CAN XL frame",
+            Self::OddDlc => "classic frame with a DLC above 8",
+        }
+    }
+}
+
+/// What a log line holds.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Entry {
+    /// A classic CAN frame.
+    Frame(LogFrame),
+    /// A frame that is skipped.
+    Skipped(Skip),
+}
 
 /// One frame of a candump log.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -23,7 +67,7 @@ pub struct LogFrame {
     pub extended: bool,
     /// Remote frame.
     pub remote: bool,
-    /// CAN FD frame.
+    /// CAN FD frame (always `false`: FD frames are [`Skip::CanFd`]).
     pub fd: bool,
     /// Data bytes.
     pub data: Vec<u8>,
@@ -40,7 +84,7 @@ fn hex_bytes(s: &str) -> Option<Vec<u8>> {
 }
 
 /// Parse one log line; `Ok(None)` for a blank or `#` comment line.
-pub fn parse_line(line: &str) -> Result<Option<LogFrame>, String> {
+pub fn parse_line(line: &str) -> Result<Option<Entry>, String> {
     let line = line.trim();
     if line.is_empty() || line.starts_with('#') {
         return Ok(None);
@@ -70,43 +114,73 @@ pub fn parse_line(line: &str) -> Result<Option<LogFrame>, String> {
     let (id_text, rest) = frame
         .split_once('#')
         .ok_or_else(|| format!("bad frame `{frame}`, expected `id#data`"))?;
+    if rest.contains(':') {
+        return Ok(Some(Entry::Skipped(Skip::CanXl)));
+    }
     let extended = match id_text.len() {
         3 => false,
         8 => true,
         _ => return Err(format!("bad identifier `{id_text}`: 3 or 8 hex digits")),
     };
-    let id = u32::from_str_radix(id_text, 16)
-        .ok()
-        .filter(|&id| id <= if extended { 0x1FFF_FFFF } else { 0x7FF })
-        .ok_or_else(|| format!("bad identifier `{id_text}`"))?;
-    let (fd, remote, data) = if let Some(fd) = rest.strip_prefix('#') {
-        // CAN FD: one flags nibble, then data.
-        let bytes = fd
-            .get(1..)
+    let id = u32::from_str_radix(id_text, 16).map_err(|_| format!("bad identifier `{id_text}`"))?;
+    if extended && id & CAN_ERR_FLAG != 0 {
+        return Ok(Some(Entry::Skipped(Skip::ErrorFrame)));
+    }
+    if id > if extended { 0x1FFF_FFFF } else { 0x7FF } {
+        return Err(format!("bad identifier `{id_text}`"));
+    }
+    if let Some(fd) = rest.strip_prefix('#') {
+        // CAN FD: one flags nibble, then up to 64 data bytes.
+        fd.get(1..)
             .and_then(hex_bytes)
             .filter(|d| d.len() <= 64)
             .ok_or_else(|| format!("bad CAN FD data `{fd}`"))?;
-        (true, false, bytes)
-    } else if let Some(r) = rest.strip_prefix('R') {
-        if !(r.is_empty() || (r.len() == 1 && r.as_bytes()[0].is_ascii_digit())) {
-            return Err(format!("bad remote frame `{rest}`"));
-        }
-        (false, true, Vec::new())
-    } else {
-        let bytes = hex_bytes(rest)
-            .filter(|d| d.len() <= 8)
-            .ok_or_else(|| format!("bad data `{rest}`: up to 8 bytes as hex pairs"))?;
-        (false, false, bytes)
+        return Ok(Some(Entry::Skipped(Skip::CanFd)));
+    }
+    let Some((remote, data)) = classic_data(rest)? else {
+        return Ok(Some(Entry::Skipped(Skip::OddDlc)));
     };
-    Ok(Some(LogFrame {
+    Ok(Some(Entry::Frame(LogFrame {
         time: time.to_string(),
         iface: iface.to_string(),
         id,
         extended,
         remote,
-        fd,
+        fd: false,
         data,
-    }))
+    })))
+}
+
+/// The error flag of a SocketCAN identifier (`CAN_ERR_FLAG`).
+const CAN_ERR_FLAG: u32 = 0x2000_0000;
+
+/// A classic frame's data after `#`: (remote, bytes); `None` for a DLC
+/// above 8.
+fn classic_data(rest: &str) -> Result<Option<(bool, Vec<u8>)>, String> {
+    if let Some(r) = rest.strip_prefix('R') {
+        let dlc = r.strip_prefix('_').unwrap_or(r);
+        let ok = r.is_empty() || (dlc.len() == 1 && dlc.as_bytes()[0].is_ascii_hexdigit());
+        if !ok {
+            return Err(format!("bad remote frame `{rest}`"));
+        }
+        let odd = u8::from_str_radix(dlc, 16).is_ok_and(|d| d > 8);
+        return Ok((!odd).then(|| (true, Vec::new())));
+    }
+    // `data_D`: a raw DLC 9..F on a frame of 8 bytes (candump -8).
+    let (hex, dlc) = match rest.split_once('_') {
+        Some((h, d)) => (h, Some(d)),
+        None => (rest, None),
+    };
+    let bytes =
+        hex_bytes(hex).ok_or_else(|| format!("bad data `{rest}`: up to 8 bytes as hex pairs"))?;
+    if let Some(d) = dlc {
+        let ok = d.len() == 1 && u8::from_str_radix(d, 16).is_ok_and(|d| d > 8);
+        if !ok || bytes.len() != 8 {
+            return Err(format!("bad DLC suffix `_{d}` (9..F on 8 data bytes)"));
+        }
+        return Ok(None);
+    }
+    Ok((bytes.len() <= 8).then_some((false, bytes)))
 }
 
 /// How a frame fared.
@@ -154,6 +228,10 @@ pub struct FrameRecord {
     /// Physical value per signal (`null`: not available).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub signals: Option<BTreeMap<&'static str, Option<f64>>>,
+    /// The bit-mask signals by flag name (`Health`, `FaultedChannels`);
+    /// `signals` keeps their numeric value.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub flags: Option<BTreeMap<&'static str, Vec<String>>>,
     /// The error or the human-readable signal list.
     pub text: String,
     /// Data bytes, hex.
@@ -174,6 +252,7 @@ fn record(f: &LogFrame, decoder: &mut Decoder) -> FrameRecord {
         counter: None,
         lost: None,
         signals: None,
+        flags: None,
         text: String::new(),
         data: hex(&f.data),
     };
@@ -202,11 +281,12 @@ fn record(f: &LogFrame, decoder: &mut Decoder) -> FrameRecord {
                 }
             };
             let signals = message.signals();
-            r.text = signals
+            r.text = signals.iter().map(describe).collect::<Vec<_>>().join(" ");
+            let flags: BTreeMap<_, _> = signals
                 .iter()
-                .map(|s| s.to_string())
-                .collect::<Vec<_>>()
-                .join(" ");
+                .filter_map(|s| Some((s.name, flag_names(s)?)))
+                .collect();
+            r.flags = (!flags.is_empty()).then_some(flags);
             r.signals = Some(
                 signals
                     .iter()
@@ -247,6 +327,62 @@ fn record(f: &LogFrame, decoder: &mut Decoder) -> FrameRecord {
     r
 }
 
+/// Names of the health bits (`monitor::status::health`).
+const HEALTH_FLAGS: [(u16, &str); 11] = {
+    use monitor::status::health::*;
+    [
+        (WARMING_UP, "WARMING_UP"),
+        (EVIDENCE_PAUSED, "EVIDENCE_PAUSED"),
+        (DATA_GAP, "DATA_GAP"),
+        (FILTER_RESET, "FILTER_RESET"),
+        (SENSOR_FAULT, "SENSOR_FAULT"),
+        (LEAK_WARNING, "LEAK_WARNING"),
+        (ALARM_LATCHED, "ALARM_LATCHED"),
+        (MODEL_MISMATCH, "MODEL_MISMATCH"),
+        (TIME_NOT_INCREASING, "TIME_NOT_INCREASING"),
+        (INCONCLUSIVE, "INCONCLUSIVE"),
+        (OUTLIER, "OUTLIER"),
+    ]
+};
+
+/// The set bits of a bit-mask signal by name (unknown bits as `BITn`);
+/// `None` for other signals.
+fn flag_names(s: &Signal) -> Option<Vec<String>> {
+    let SignalValue::Integer { value, .. } = s.value else {
+        return None;
+    };
+    let name = |bit: u32| -> String {
+        let mask = 1u32 << bit;
+        let known = match s.name {
+            "Health" => HEALTH_FLAGS
+                .iter()
+                .find(|(m, _)| u32::from(*m) == mask)
+                .map(|(_, n)| *n),
+            _ => monitor::Channel::ALL.get(bit as usize).map(|c| c.name()),
+        };
+        known.map_or_else(|| format!("BIT{bit}"), str::to_string)
+    };
+    match s.name {
+        "Health" | "FaultedChannels" => Some(
+            (0..32)
+                .filter(|b| value & (1 << b) != 0)
+                .map(name)
+                .collect(),
+        ),
+        _ => None,
+    }
+}
+
+/// A signal for people: bit masks by flag name (`Health=WARMING_UP|DATA_GAP`,
+/// `none` when clear).
+fn describe(s: &Signal) -> String {
+    match flag_names(s) {
+        Some(names) if names.is_empty() => format!("{}=none", s.name),
+        Some(names) => format!("{}={}", s.name, names.join("|")),
+        None => s.to_string(),
+    }
+}
+
 /// Counts over a log.
 #[derive(Clone, Debug, Default, PartialEq, Eq, Serialize)]
 pub struct Summary {
@@ -266,12 +402,34 @@ pub struct Summary {
     pub repeated: u64,
     /// Other traffic.
     pub foreign: u64,
+    /// Skipped lines: CAN error frames.
+    pub error_frames: u64,
+    /// Skipped lines: CAN FD frames.
+    pub fd_frames: u64,
+    /// Skipped lines: CAN XL frames.
+    pub xl_frames: u64,
+    /// Skipped lines: classic frames with a DLC above 8.
+    pub odd_dlc: u64,
 }
 
 impl Summary {
-    /// Were any protection or format errors seen?
+    /// Were any protection or format errors seen (skipped lines count)?
     pub fn has_errors(&self) -> bool {
-        self.bad_crc + self.malformed + self.counter_jumps + self.repeated > 0
+        self.bad_crc + self.malformed + self.counter_jumps + self.repeated + self.skipped() > 0
+    }
+
+    /// Lines skipped (error frames, CAN FD and XL, odd DLCs).
+    pub fn skipped(&self) -> u64 {
+        self.error_frames + self.fd_frames + self.xl_frames + self.odd_dlc
+    }
+
+    fn skip(&mut self, s: Skip) {
+        *match s {
+            Skip::ErrorFrame => &mut self.error_frames,
+            Skip::CanFd => &mut self.fd_frames,
+            Skip::CanXl => &mut self.xl_frames,
+            Skip::OddDlc => &mut self.odd_dlc,
+        } += 1;
     }
 
     fn add(&mut self, r: &FrameRecord) {
@@ -307,7 +465,19 @@ impl std::fmt::Display for Summary {
             self.frames_lost,
             self.repeated,
             self.foreign
-        )
+        )?;
+        if self.skipped() > 0 {
+            write!(
+                f,
+                "; {} lines skipped ({} CAN error frames, {} CAN FD, {} CAN XL, {} DLC above 8)",
+                self.skipped(),
+                self.error_frames,
+                self.fd_frames,
+                self.xl_frames,
+                self.odd_dlc
+            )?;
+        }
+        Ok(())
     }
 }
 
@@ -333,21 +503,53 @@ pub fn format_record(r: &FrameRecord, time: &str) -> String {
 }
 
 /// Decode a candump log from `input`, writing one line per frame (or one
-/// JSON object per frame) to `out`. `name` labels errors.
+/// JSON object per frame) to `out`. `name` labels errors. Skipped lines
+/// are counted only.
 pub fn decode_log(
     input: impl BufRead,
     name: &str,
     json: bool,
     out: &mut impl Write,
 ) -> Result<Summary> {
+    decode_stream(input, name, json, out, None)
+}
+
+/// As [`decode_log`], flushing `out` after every frame; with `strict`
+/// (`Some(diagnostics)`), every skipped line is an error there naming it.
+pub fn decode_stream(
+    mut input: impl BufRead,
+    name: &str,
+    json: bool,
+    out: &mut impl Write,
+    mut strict: Option<&mut dyn Write>,
+) -> Result<Summary> {
     let mut decoder = Decoder::new();
     let mut summary = Summary::default();
-    for (i, line) in input.lines().enumerate() {
-        let line = line.with_context(|| format!("{name}:{}: cannot read", i + 1))?;
-        let frame = match parse_line(&line) {
-            Ok(Some(f)) => f,
+    let mut raw = Vec::new();
+    for n in 1.. {
+        if read_line(&mut input, &mut raw, MAX_LINE_BYTES, n).map_err(|e| {
+            match Exceeded::of(&e) {
+                Some(_) => anyhow!(
+                    "{name}:{n}: line longer than {MAX_LINE_BYTES} bytes (not a candump log?)"
+                ),
+                None => anyhow!("{name}:{n}: cannot read: {e}"),
+            }
+        })? == 0
+        {
+            break;
+        }
+        let line = std::str::from_utf8(&raw).map_err(|e| anyhow!("{name}:{n}: not text: {e}"))?;
+        let frame = match parse_line(line) {
+            Ok(Some(Entry::Frame(f))) => f,
+            Ok(Some(Entry::Skipped(s))) => {
+                summary.skip(s);
+                if let Some(w) = strict.as_deref_mut() {
+                    writeln!(w, "error: {name}:{n}: {}: `{}`", s.describe(), line.trim())?;
+                }
+                continue;
+            }
             Ok(None) => continue,
-            Err(e) => bail!("{name}:{}: {e}: `{}`", i + 1, line.trim()),
+            Err(e) => bail!("{name}:{n}: {e}: `{}`", line.trim()),
         };
         let r = record(&frame, &mut decoder);
         summary.add(&r);
@@ -357,55 +559,10 @@ pub fn decode_log(
         } else {
             writeln!(out, "{}", format_record(&r, &frame.time))?;
         }
+        out.flush()?;
     }
     Ok(summary)
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn parses_candump_lines() {
-        let f = parse_line("(1700000000.123456) can0 301#00112233AABBCCDD")
-            .unwrap()
-            .unwrap();
-        assert_eq!(f.time, "1700000000.123456");
-        assert_eq!(f.iface, "can0");
-        assert_eq!(f.id, 0x301);
-        assert!(!f.extended && !f.remote && !f.fd);
-        assert_eq!(f.data, [0x00, 0x11, 0x22, 0x33, 0xAA, 0xBB, 0xCC, 0xDD]);
-        let f = parse_line("(1.000001) vcan0 12345678#ab R")
-            .unwrap()
-            .unwrap();
-        assert!(f.extended && f.id == 0x1234_5678 && f.data == [0xAB]);
-        assert!(parse_line("(1.0) can0 123#R").unwrap().unwrap().remote);
-        assert!(parse_line("(1.0) can0 123##1AABB").unwrap().unwrap().fd);
-        assert_eq!(parse_line("").unwrap(), None);
-        assert_eq!(parse_line("# comment").unwrap(), None);
-        assert!(parse_line("(1.0) can0 300#")
-            .unwrap()
-            .unwrap()
-            .data
-            .is_empty());
-    }
-
-    #[test]
-    fn rejects_malformed_lines_with_a_reason() {
-        for (line, why) in [
-            ("can0 301#00", "expected"),
-            ("(1) can0 301#00", "timestamp"),
-            ("(1.x) can0 301#00", "timestamp"),
-            ("(1.0) can0 3011#00", "identifier"),
-            ("(1.0) can0 801#00", "identifier"),
-            ("(1.0) can0 301-00", "id#data"),
-            ("(1.0) can0 301#0", "data"),
-            ("(1.0) can0 301#001122334455667788", "data"),
-            ("(1.0) can0 301#zz", "data"),
-            ("(1.0) can0 301#00 extra", "unexpected"),
-        ] {
-            let e = parse_line(line).unwrap_err();
-            assert!(e.contains(why), "{line}: {e}");
-        }
-    }
-}
+mod tests;

@@ -1,12 +1,22 @@
-//! Recordings in the CSV format of `../shared/spec/recording-csv.md`:
-//! a streaming reader (constant memory, any length) with errors that name
-//! the file, line and column, and a writer. Gzip-compressed recordings
-//! (`.csv.gz`, recognised by their magic bytes) are read and written
-//! transparently: an hour at 1 kHz is 200 MB of text.
+//! Recordings in the CSV format of `docs/recording-format.md`: a streaming
+//! reader (constant memory, any length up to [`MAX_TOTAL_BYTES`], lines up
+//! to [`MAX_LINE_BYTES`]) with errors that name the file, line and column,
+//! and a writer. Gzip-compressed recordings (`.csv.gz`, recognised by their
+//! magic bytes) are read and written transparently: an hour at 1 kHz is
+//! 200 MB of text. The path `-` reads standard input.
+
+pub(crate) mod bounded;
+mod top;
+mod write;
+
+use bounded::{Bounded, Exceeded, RecordMark};
+pub use bounded::{Limits, MAX_LINE_BYTES, MAX_TOTAL_BYTES};
+use top::{columns, read_top};
+pub use write::{FileSink, RecordingWriter};
 
 use monitor::{Channel, Sample};
 use std::fs::File;
-use std::io::{self, BufRead, BufReader, BufWriter, Read, Write};
+use std::io::{self, BufRead, BufReader, Read};
 use std::path::Path;
 
 /// Format tag written to new recordings.
@@ -15,13 +25,72 @@ pub const FORMAT: &str = "leak-recording/1";
 /// A recording that cannot be read, and exactly where.
 #[derive(Debug, thiserror::Error)]
 pub enum RecordingError {
-    /// The file could not be opened or read.
-    #[error("{file}: cannot read: {source}")]
+    /// The file could not be opened or read (the cause is in the message,
+    /// not repeated as a source).
+    #[error("{file}: cannot read: {cause}")]
     Io {
         /// File name.
         file: String,
         /// Cause.
-        source: io::Error,
+        cause: io::Error,
+    },
+    /// A line is longer than the reader's limit.
+    #[error("{file}:{line}: line longer than {limit} bytes (not a recording, or no line ends)")]
+    LineTooLong {
+        /// File name.
+        file: String,
+        /// Line number.
+        line: u64,
+        /// The limit, bytes.
+        limit: u64,
+    },
+    /// A CSV record (lines joined by an open `"`) is longer than the limit.
+    #[error("{file}:{line}: record longer than {limit} bytes (an unclosed `\"`?)")]
+    RecordTooLong {
+        /// File name.
+        file: String,
+        /// Line number.
+        line: u64,
+        /// The limit, bytes.
+        limit: u64,
+    },
+    /// More text than the reader's limit (after decompression).
+    #[error("{file}:{line}: more than {limit} bytes of text (decompressed): larger than any recording host-sim reads")]
+    TooLarge {
+        /// File name.
+        file: String,
+        /// Line number where the limit was reached.
+        line: u64,
+        /// The limit, bytes.
+        limit: u64,
+    },
+    /// `# sample_rate_hz=` is not a plausible rate.
+    #[error("{file}:{line}: `sample_rate_hz={value}` is not a plausible sample rate (a number of Hz within {MIN_SAMPLE_RATE_HZ}..{MAX_SAMPLE_RATE_HZ})")]
+    BadSampleRate {
+        /// File name.
+        file: String,
+        /// Metadata line number.
+        line: u64,
+        /// The value as found.
+        value: String,
+    },
+    /// More `# key=value` lines than the reader keeps.
+    #[error("{file}:{line}: more than {limit} metadata lines (`# key=value`) before the header")]
+    TooMuchMetadata {
+        /// File name.
+        file: String,
+        /// Line number.
+        line: u64,
+        /// The limit.
+        limit: usize,
+    },
+    /// The header is not followed by any sample.
+    #[error("{file}:{line}: no samples after the header (a recording needs at least one row)")]
+    NoSamples {
+        /// File name.
+        file: String,
+        /// Header line number.
+        line: u64,
     },
     /// No header line before the end of the file.
     #[error("{file}: no header line (only `#` lines or an empty file)")]
@@ -91,6 +160,22 @@ pub enum RecordingError {
         /// The field as found.
         value: String,
     },
+    /// A reading beyond the range of the monitor's `f32` inputs.
+    #[error(
+        "{file}:{line}: column {index} `{column}`: `{value}` is out of range (beyond ±3.4e38)"
+    )]
+    OutOfRange {
+        /// File name.
+        file: String,
+        /// Line number.
+        line: u64,
+        /// 1-based column number.
+        index: usize,
+        /// Column name.
+        column: String,
+        /// The field as found.
+        value: String,
+    },
     /// The time column is empty.
     #[error("{file}:{line}: column {index} `t` is empty (time is required on every row)")]
     MissingTime {
@@ -135,6 +220,14 @@ pub enum RecordingError {
     },
 }
 
+/// Most `# key=value` lines a recording may have.
+pub const MAX_METADATA: usize = 1024;
+
+/// Lowest plausible `# sample_rate_hz=`, Hz.
+pub const MIN_SAMPLE_RATE_HZ: f64 = 10.0;
+/// Highest plausible `# sample_rate_hz=`, Hz.
+pub const MAX_SAMPLE_RATE_HZ: f64 = 100_000.0;
+
 /// Column positions of the channels.
 #[derive(Clone, Debug)]
 struct Columns {
@@ -148,113 +241,80 @@ pub struct RecordingReader<R: Read> {
     file: String,
     metadata: Vec<(String, String)>,
     cols: Columns,
-    csv: csv::Reader<R>,
+    csv: csv::Reader<Bounded<R>>,
+    mark: RecordMark,
     header_line: u64,
     record: csv::StringRecord,
     previous_t: Option<f64>,
+    rows: u64,
     failed: bool,
     extra: Vec<(String, usize)>,
 }
 
-/// A file, plain or gzip-compressed.
+/// A file (or standard input), plain or gzip-compressed.
 pub type FileSource = BufReader<Box<dyn Read + Send>>;
 
 impl RecordingReader<FileSource> {
-    /// Open `path` (plain CSV, or gzip-compressed CSV).
+    /// Open `path` (plain CSV, or gzip-compressed CSV; `-` is standard
+    /// input) with the default [`Limits`].
     pub fn open(path: &Path) -> Result<Self, RecordingError> {
-        let file = path.display().to_string();
-        let io = |source| RecordingError::Io {
-            file: file.clone(),
-            source,
+        Self::open_with_limits(path, Limits::default())
+    }
+
+    /// [`open`](Self::open) with other limits.
+    pub fn open_with_limits(path: &Path, limits: Limits) -> Result<Self, RecordingError> {
+        let stdin = path.as_os_str() == "-";
+        let file = if stdin {
+            "<stdin>".to_string()
+        } else {
+            path.display().to_string()
         };
-        let mut f = BufReader::with_capacity(1 << 16, File::open(path).map_err(io)?);
+        let io = |cause| RecordingError::Io {
+            file: file.clone(),
+            cause,
+        };
+        let raw: Box<dyn Read + Send> = if stdin {
+            Box::new(io::stdin())
+        } else {
+            Box::new(File::open(path).map_err(io)?)
+        };
+        let mut f = BufReader::with_capacity(1 << 16, raw);
         let gz = f.fill_buf().map_err(io)?.starts_with(&[0x1f, 0x8b]);
         let inner: Box<dyn Read + Send> = if gz {
             Box::new(flate2::bufread::MultiGzDecoder::new(f))
         } else {
             Box::new(f)
         };
-        Self::new(BufReader::with_capacity(1 << 16, inner), &file)
+        Self::with_limits(BufReader::with_capacity(1 << 16, inner), &file, limits)
     }
 }
 
 impl<R: BufRead> RecordingReader<R> {
     /// Read from `reader`; `file` names the source in errors.
-    pub fn new(mut reader: R, file: &str) -> Result<Self, RecordingError> {
+    pub fn new(reader: R, file: &str) -> Result<Self, RecordingError> {
+        Self::with_limits(reader, file, Limits::default())
+    }
+
+    /// [`new`](Self::new) with other limits.
+    pub fn with_limits(mut reader: R, file: &str, limits: Limits) -> Result<Self, RecordingError> {
         let file = file.to_string();
-        let io = |source| RecordingError::Io {
-            file: file.clone(),
-            source,
-        };
-        let mut metadata = Vec::new();
-        let mut line_no = 0u64;
-        let mut line = String::new();
-        let header = loop {
-            line.clear();
-            if reader.read_line(&mut line).map_err(io)? == 0 {
-                return Err(RecordingError::NoHeader { file });
-            }
-            line_no += 1;
-            let text = line.trim_end_matches(['\n', '\r']);
-            if let Some(rest) = text.strip_prefix('#') {
-                if let Some((k, v)) = rest.trim_start().split_once('=') {
-                    if !k.contains(' ') {
-                        metadata.push((k.to_string(), v.to_string()));
-                    }
-                }
-                continue;
-            }
-            if text.trim().is_empty() {
-                continue;
-            }
-            break text.to_string();
-        };
-        let names: Vec<String> = header.split(',').map(|s| s.trim().to_string()).collect();
-        for (i, n) in names.iter().enumerate() {
-            if names[..i].contains(n) {
-                return Err(RecordingError::DuplicateColumn {
-                    file,
-                    line: line_no,
-                    column: n.clone(),
-                });
-            }
-        }
-        let find = |name: &str| names.iter().position(|n| n == name);
-        let missing = |column: &'static str| RecordingError::MissingColumn {
-            file: file.clone(),
-            line: line_no,
-            column,
-            header: header.clone(),
-        };
-        let t = find("t").ok_or_else(|| missing("t"))?;
-        let mut channels = [None; 7];
-        for ch in Channel::ALL {
-            channels[ch as usize] = find(ch.name());
-            if ch != Channel::TempOil && channels[ch as usize].is_none() {
-                return Err(missing(ch.name()));
-            }
-        }
-        let known: Vec<&str> = std::iter::once("t")
-            .chain(Channel::ALL.iter().map(|c| c.name()))
-            .collect();
-        let extra = names
-            .iter()
-            .enumerate()
-            .filter(|(_, n)| !known.contains(&n.as_str()))
-            .map(|(i, n)| (n.clone(), i))
-            .collect();
+        let top = read_top(&mut reader, &file, limits)?;
+        let (cols, extra) = columns(&top, &file)?;
+        let (bounded, mark) = Bounded::new(reader, limits, top.line + 1, top.bytes);
         let csv = csv::ReaderBuilder::new()
             .has_headers(false)
             .flexible(true)
-            .from_reader(reader);
+            .from_reader(bounded);
         Ok(Self {
             file,
-            metadata,
-            cols: Columns { t, channels, names },
+            metadata: top.metadata,
+            cols,
             csv,
-            header_line: line_no,
+            mark,
+            header_line: top.line,
             record: csv::StringRecord::new(),
             previous_t: None,
+            rows: 0,
             failed: false,
             extra,
         })
@@ -297,13 +357,18 @@ impl<R: BufRead> RecordingReader<R> {
                 Ok(true) => {}
                 Err(e) => {
                     let line = e.position().map_or(0, |p| p.line()) + self.header_line;
-                    return Some(Err(RecordingError::Csv {
-                        file: self.file.clone(),
-                        line,
-                        message: e.to_string(),
+                    let message = e.to_string();
+                    return Some(Err(match e.into_kind() {
+                        csv::ErrorKind::Io(cause) => io_error(&self.file, cause),
+                        _ => RecordingError::Csv {
+                            file: self.file.clone(),
+                            line,
+                            message,
+                        },
                     }));
                 }
             }
+            self.mark.reset();
             let line = self.record.position().map_or(0, |p| p.line()) + self.header_line;
             // Blank lines (a trailing newline pair) are not rows.
             if self.record.len() == 1 && self.record[0].trim().is_empty() {
@@ -360,7 +425,7 @@ impl<R: BufRead> RecordingReader<R> {
         let mut values = [None; 7];
         for ch in Channel::ALL {
             if let Some(i) = self.cols.channels[ch as usize] {
-                values[ch as usize] = field(i)?.map(|v| v as f32);
+                values[ch as usize] = field(i)?.map(|v| self.to_f32(v, line, i)).transpose()?;
             }
         }
         Ok(Sample {
@@ -372,6 +437,22 @@ impl<R: BufRead> RecordingReader<R> {
             x_piston_m: values[4],
             u_valve: values[5],
             temp_oil_c: values[6],
+        })
+    }
+
+    /// A reading as the monitor's `f32`: beyond its range is an error,
+    /// never an infinity.
+    fn to_f32(&self, v: f64, line: u64, i: usize) -> Result<f32, RecordingError> {
+        let x = v as f32;
+        if x.is_finite() {
+            return Ok(x);
+        }
+        Err(RecordingError::OutOfRange {
+            file: self.file.clone(),
+            line,
+            index: i + 1,
+            column: self.cols.names[i].clone(),
+            value: self.record[i].trim().to_string(),
         })
     }
 
@@ -395,14 +476,37 @@ impl<R: BufRead> RecordingReader<R> {
     }
 }
 
+/// An I/O error of `file`, or the limit it carries.
+fn io_error(file: &str, cause: io::Error) -> RecordingError {
+    let file = file.to_string();
+    match Exceeded::of(&cause) {
+        Some(Exceeded::Line { line, limit }) => RecordingError::LineTooLong { file, line, limit },
+        Some(Exceeded::Record { line, limit }) => {
+            RecordingError::RecordTooLong { file, line, limit }
+        }
+        Some(Exceeded::Total { line, limit }) => RecordingError::TooLarge { file, line, limit },
+        None => RecordingError::Io { file, cause },
+    }
+}
+
 impl<R: BufRead> Iterator for RecordingReader<R> {
     type Item = Result<Sample, RecordingError>;
 
     fn next(&mut self) -> Option<Self::Item> {
-        let s = match self.next_sample()? {
-            Ok(s) => s,
-            Err(e) => return Some(Err(e)),
+        let s = match self.next_sample() {
+            Some(Ok(s)) => s,
+            Some(Err(e)) => return Some(Err(e)),
+            None if self.rows == 0 && !self.failed => {
+                // A header alone is no recording (and no evidence).
+                self.failed = true;
+                return Some(Err(RecordingError::NoSamples {
+                    file: self.file.clone(),
+                    line: self.header_line,
+                }));
+            }
+            None => return None,
         };
+        self.rows += 1;
         if let Err(e) = self.check_time(&s) {
             self.failed = true;
             return Some(Err(e));
@@ -411,269 +515,5 @@ impl<R: BufRead> Iterator for RecordingReader<R> {
     }
 }
 
-/// Writes recordings.
-pub struct RecordingWriter<W: Write> {
-    w: BufWriter<W>,
-    temperature: bool,
-    extra: usize,
-}
-
-/// A file being written, plain or gzip-compressed.
-pub enum FileSink {
-    /// Plain text.
-    Plain(File),
-    /// Gzip stream.
-    Gzip(flate2::write::GzEncoder<File>),
-}
-
-impl Write for FileSink {
-    fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
-        match self {
-            Self::Plain(f) => f.write(buf),
-            Self::Gzip(g) => g.write(buf),
-        }
-    }
-    fn flush(&mut self) -> io::Result<()> {
-        match self {
-            Self::Plain(f) => f.flush(),
-            Self::Gzip(g) => g.flush(),
-        }
-    }
-}
-
-impl FileSink {
-    fn close(self) -> io::Result<()> {
-        match self {
-            Self::Plain(mut f) => f.flush(),
-            Self::Gzip(g) => g.finish().map(drop),
-        }
-    }
-}
-
-impl RecordingWriter<FileSink> {
-    /// Create `path`; gzip-compressed if it ends in `.gz`.
-    pub fn create(
-        path: &Path,
-        metadata: &[(&str, String)],
-        temperature: bool,
-        extra: &[&str],
-    ) -> io::Result<Self> {
-        let f = File::create(path)?;
-        let w = if path.extension().is_some_and(|e| e == "gz") {
-            FileSink::Gzip(flate2::write::GzEncoder::new(
-                f,
-                flate2::Compression::best(),
-            ))
-        } else {
-            FileSink::Plain(f)
-        };
-        Self::new(w, metadata, temperature, extra)
-    }
-
-    /// Flush and close the file (finishing the gzip stream).
-    pub fn close(self) -> io::Result<()> {
-        self.w.into_inner().map_err(|e| e.into_error())?.close()
-    }
-}
-
-impl<W: Write> RecordingWriter<W> {
-    /// Start a recording on `w` with `# key=value` metadata, optionally the
-    /// `temp_oil` column, and extra columns (e.g. simulator truth).
-    pub fn new(
-        w: W,
-        metadata: &[(&str, String)],
-        temperature: bool,
-        extra: &[&str],
-    ) -> io::Result<Self> {
-        let mut w = BufWriter::with_capacity(1 << 16, w);
-        writeln!(w, "# format={FORMAT}")?;
-        for (k, v) in metadata {
-            // Keep metadata on one line.
-            writeln!(w, "# {k}={}", v.replace(['\n', '\r'], " "))?;
-        }
-        write!(w, "t,p_supply,p_piston,p_rod,p_tank,x_piston,u_valve")?;
-        if temperature {
-            write!(w, ",temp_oil")?;
-        }
-        for e in extra {
-            write!(w, ",{e}")?;
-        }
-        writeln!(w)?;
-        Ok(Self {
-            w,
-            temperature,
-            extra: extra.len(),
-        })
-    }
-
-    /// Write one row; `extra` must match the extra columns.
-    pub fn write(&mut self, s: &Sample, extra: &[f64]) -> io::Result<()> {
-        debug_assert_eq!(extra.len(), self.extra);
-        let w = &mut self.w;
-        write!(w, "{:.4}", s.t_s)?;
-        for (v, prec) in [
-            (s.p_supply_bar, 3),
-            (s.p_piston_bar, 3),
-            (s.p_rod_bar, 3),
-            (s.p_tank_bar, 3),
-            (s.x_piston_m, 6),
-            (s.u_valve, 5),
-        ] {
-            match v {
-                Some(v) => write!(w, ",{v:.prec$}")?,
-                None => write!(w, ",")?,
-            }
-        }
-        if self.temperature {
-            match s.temp_oil_c {
-                Some(v) => write!(w, ",{v:.2}")?,
-                None => write!(w, ",")?,
-            }
-        }
-        for e in extra {
-            write!(w, ",{e:.5}")?;
-        }
-        writeln!(w)
-    }
-
-    /// Flush to the underlying writer.
-    pub fn finish(mut self) -> io::Result<()> {
-        self.w.flush()
-    }
-}
-
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn read_all(text: &str) -> Result<Vec<Sample>, RecordingError> {
-        RecordingReader::new(text.as_bytes(), "test.csv")?.collect()
-    }
-
-    const GOOD: &str = "# format=leak-recording/1\n# sample_rate_hz=1000\n\
-        t,p_supply,p_piston,p_rod,p_tank,x_piston,u_valve,temp_oil\n\
-        0.000,50.12,21.40,12.95,0.80,0.0412,0.000,25.1\n\
-        0.001,50.10,21.43,12.93,0.81,0.0412,0.000,25.1\n";
-
-    #[test]
-    fn reads_the_spec_example() {
-        let r = RecordingReader::new(GOOD.as_bytes(), "x.csv").unwrap();
-        assert_eq!(r.meta("sample_rate_hz"), Some("1000"));
-        let s: Vec<Sample> = r.collect::<Result<_, _>>().unwrap();
-        assert_eq!(s.len(), 2);
-        assert_eq!(s[1].t_s, 0.001);
-        assert_eq!(s[0].p_rod_bar, Some(12.95));
-        assert_eq!(s[0].temp_oil_c, Some(25.1));
-    }
-
-    #[test]
-    fn column_order_is_free_unknown_columns_ignored_crlf_ok() {
-        let text = "u_valve,t,note,x_piston,p_tank,p_rod,p_piston,p_supply\r\n0.1,0.5,hello,0.05,1,13,21,50\r\n";
-        let s = read_all(text).unwrap();
-        assert_eq!(s[0].t_s, 0.5);
-        assert_eq!(s[0].u_valve, Some(0.1));
-        assert_eq!(s[0].p_supply_bar, Some(50.0));
-        assert_eq!(s[0].temp_oil_c, None);
-    }
-
-    #[test]
-    fn empty_field_is_a_missing_reading_not_zero() {
-        let text = "t,p_supply,p_piston,p_rod,p_tank,x_piston,u_valve\n0,50,,13,1,0.05,0\n";
-        let s = read_all(text).unwrap();
-        assert_eq!(s[0].p_piston_bar, None);
-    }
-
-    fn err(text: &str) -> String {
-        read_all(text).unwrap_err().to_string()
-    }
-
-    #[test]
-    fn missing_column_is_named() {
-        let e = err("t,p_supply,p_piston,p_tank,x_piston,u_valve\n0,1,2,3,4,5\n");
-        assert!(e.contains("test.csv:1") && e.contains("`p_rod`"), "{e}");
-    }
-
-    #[test]
-    fn bad_number_names_line_and_column() {
-        let e = err("# c\nt,p_supply,p_piston,p_rod,p_tank,x_piston,u_valve\n0,50,21,13,1,0.05,0\n0.001,50,2l.5,13,1,0.05,0\n");
-        assert!(
-            e.contains("test.csv:4") && e.contains("column 3 `p_piston`") && e.contains("2l.5"),
-            "{e}"
-        );
-    }
-
-    #[test]
-    fn nan_and_infinity_are_rejected() {
-        for bad in ["NaN", "nan", "inf", "-Infinity"] {
-            let e = err(&format!(
-                "t,p_supply,p_piston,p_rod,p_tank,x_piston,u_valve\n0,50,21,{bad},1,0.05,0\n"
-            ));
-            assert!(
-                e.contains("test.csv:2") && e.contains("`p_rod`") && e.contains("finite"),
-                "{e}"
-            );
-        }
-    }
-
-    #[test]
-    fn time_must_strictly_increase() {
-        let e = err("t,p_supply,p_piston,p_rod,p_tank,x_piston,u_valve\n0,50,21,13,1,0.05,0\n0.002,50,21,13,1,0.05,0\n0.002,50,21,13,1,0.05,0\n");
-        assert!(
-            e.contains("test.csv:4") && e.contains("`t`") && e.contains("does not increase"),
-            "{e}"
-        );
-        let e = err("t,p_supply,p_piston,p_rod,p_tank,x_piston,u_valve\n0,50,21,13,1,0.05,0\n,50,21,13,1,0.05,0\n");
-        assert!(
-            e.contains("test.csv:3") && e.contains("`t` is empty"),
-            "{e}"
-        );
-    }
-
-    #[test]
-    fn structural_errors() {
-        assert!(err("# only comments\n").contains("no header"));
-        let e = err("t,p_supply,p_piston,p_rod,p_tank,x_piston,u_valve\n0,50,21,13,1,0.05\n");
-        assert!(
-            e.contains("test.csv:2") && e.contains("expected 7 fields"),
-            "{e}"
-        );
-        let e =
-            err("t,p_supply,p_piston,p_rod,p_tank,x_piston,u_valve\n0,50,21,13,1,0.05,0\n# late\n");
-        assert!(
-            e.contains("test.csv:3") && e.contains("after the header"),
-            "{e}"
-        );
-        let e = err("t,t,p_supply,p_piston,p_rod,p_tank,x_piston,u_valve\n");
-        assert!(e.contains("appears twice"), "{e}");
-    }
-
-    #[test]
-    fn write_then_read_round_trips() {
-        let mut buf = Vec::new();
-        let mut w = RecordingWriter::new(
-            &mut buf,
-            &[("note", "a\nb".into())],
-            true,
-            &["q_internal_lpm"],
-        )
-        .unwrap();
-        let s = Sample {
-            t_s: 0.123,
-            p_supply_bar: Some(50.125),
-            p_piston_bar: None,
-            p_rod_bar: Some(12.5),
-            p_tank_bar: Some(0.75),
-            x_piston_m: Some(0.041_234),
-            u_valve: Some(-0.125),
-            temp_oil_c: Some(40.0),
-        };
-        w.write(&s, &[0.4]).unwrap();
-        w.finish().unwrap();
-        let text = String::from_utf8(buf).unwrap();
-        let r = RecordingReader::new(text.as_bytes(), "rt.csv").unwrap();
-        assert_eq!(r.meta("note"), Some("a b"));
-        assert_eq!(r.extra_columns(), &[("q_internal_lpm".to_string(), 8)]);
-        let back: Vec<Sample> = r.collect::<Result<_, _>>().unwrap();
-        assert_eq!(back[0], s);
-    }
-}
+mod tests;

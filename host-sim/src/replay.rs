@@ -99,7 +99,14 @@ pub struct ReplaySummary {
     /// Mean NIS of the leading hypothesis over the samples after the
     /// warm-up (≈ 3 when the filters are consistent with the data).
     pub mean_nis: Option<f64>,
+    /// Events after the first [`MAX_EVENTS`] (alarms: after twice that),
+    /// counted but not kept in
+    /// `events` (a recording of endless gaps or faults stays bounded).
+    pub events_dropped: u64,
 }
+
+/// Most events a replay keeps in its summary.
+pub const MAX_EVENTS: usize = 10_000;
 
 /// Noise levels in the replay JSON.
 #[derive(Clone, Copy, Debug, Default, Serialize)]
@@ -244,6 +251,7 @@ pub fn replay<T: Real, R: BufRead>(
         outlier_samples: 0,
         noise: NoiseSummary::default(),
         mean_nis: None,
+        events_dropped: 0,
     };
     let (mut inconclusive, mut nis_sum, mut nis_n) = (0u64, 0.0, 0u64);
     let t0 = first.as_ref().map(|s| s.t_s);
@@ -289,7 +297,16 @@ pub fn replay<T: Real, R: BufRead>(
             if matches!(e, Event::AlarmRaised(_)) && summary.first_alarm_s.is_none() {
                 summary.first_alarm_s = Some(sample.t_s);
             }
-            summary.events.push(EventRecord::new(sample.t_s, e));
+            // Alarms are kept past the cap (the contract lists every
+            // alarm); they latch, so there are few, and a second cap still
+            // bounds the list.
+            let alarm = matches!(e, Event::AlarmRaised(_) | Event::AlarmCleared);
+            let room = if alarm { 2 * MAX_EVENTS } else { MAX_EVENTS };
+            if summary.events.len() < room {
+                summary.events.push(EventRecord::new(sample.t_s, e));
+            } else {
+                summary.events_dropped += 1;
+            }
         }
     }
     summary.model_mismatch_fraction = mismatch as f64 / summary.samples.max(1) as f64;
@@ -344,6 +361,13 @@ pub fn print_summary(s: &ReplaySummary, out: &mut dyn Write) -> std::io::Result<
         if s.events.len() > 50 {
             writeln!(out, "  … {} more", s.events.len() - 50)?;
         }
+    }
+    if s.events_dropped > 0 {
+        writeln!(
+            out,
+            "  … and {} more events not kept (only the first {MAX_EVENTS} are)",
+            s.events_dropped
+        )?;
     }
     Ok(())
 }

@@ -2,8 +2,9 @@
 //! encoder: decoded values, flagged CRC errors and counter jumps, strict
 //! exit status, malformed lines.
 
-use monitor::device::alarm::{AlarmState, LeakKind};
+use monitor::device::alarm::AlarmState;
 use monitor::protocol::{AlarmFrame, CanFrame, Encoder, Message, StatusFrame};
+use monitor::LeakSet;
 use monitor::Verdict;
 use std::path::Path;
 use std::process::{Command, Output};
@@ -39,7 +40,7 @@ fn write_log(dir: &Path) -> std::path::PathBuf {
     let mut log = String::from("# a candump log\n");
     let alarm = Message::Alarm(AlarmFrame {
         state: AlarmState::Leak,
-        latched: LeakKind::Internal,
+        latched: LeakSet::INTERNAL,
         relay_energised: false,
         faulted_channels: 0,
         changed_at_ms: 12_345,
@@ -81,9 +82,9 @@ fn decodes_and_flags_crc_errors_and_counter_jumps() {
         "{}",
         lines[1]
     );
-    assert!(
-        lines[1].contains("Verdict=internal LeakInternal=0.385 l/min LeakExternal=n/a Health=64")
-    );
+    assert!(lines[1].contains(
+        "Verdict=internal LeakInternal=0.385 l/min LeakExternal=n/a Health=ALARM_LATCHED"
+    ));
     assert!(lines[3].contains("BAD CRC"), "{}", lines[3]);
     assert!(lines[4].contains("COUNTER JUMP (2 lost)"), "{}", lines[4]);
     assert!(lines[4].contains("LeakInternal=0.389 l/min"));

@@ -1,4 +1,7 @@
-//! The four leak hypotheses of the filter bank.
+//! The four leak hypotheses of the filter bank: one filter per
+//! [`LeakSet`], named after the leaks its model contains.
+
+use crate::leak::LeakSet;
 
 /// Which leaks a hypothesis (and its filter) contains.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -18,14 +21,9 @@ impl Hypothesis {
     /// All hypotheses, in bank order.
     pub const ALL: [Hypothesis; 4] = [Self::Healthy, Self::Internal, Self::External, Self::Both];
 
-    /// Does it contain the internal leak?
-    pub const fn has_internal(self) -> bool {
-        matches!(self, Self::Internal | Self::Both)
-    }
-
-    /// Does it contain the external leak?
-    pub const fn has_external(self) -> bool {
-        matches!(self, Self::External | Self::Both)
+    /// The leaks its model contains (same code as the hypothesis).
+    pub const fn leaks(self) -> LeakSet {
+        LeakSet::from_bits(self as u8)
     }
 
     /// Lower-case name, as in the replay JSON.

@@ -11,11 +11,17 @@
 //! - `physics`: load, oil, valve and friction pieces in SI units;
 //! - `estimation` (internal): the six-state model, the EKF core and the
 //!   bank of one filter per leak hypothesis;
-//! - `decision`: evidence, verdict and alarm latching;
-//! - `monitor`: the entry point tying them together, with `params`,
-//!   `sample` and `status` as its data;
-//! - `device` and `protocol`: the fail-safe relay, the 1 ms deadline, the
-//!   watchdog supervisor and the CAN frames.
+//! - `decision` (internal): evidence, verdict, and the one leak-alarm
+//!   latch with its acknowledge policy, in the leak vocabulary of
+//!   [`Leak`], [`LeakSet`] and [`PerLeak`];
+//! - `monitor`: the entry point tying them together ([`Monitor::step`],
+//!   [`Monitor::acknowledge`]), with `params`, `sample` and `status` as
+//!   its data;
+//! - `device`: the pipeline the firmware runs per ADC block
+//!   ([`device::Estimator`]: front end → acknowledge → step → alarm
+//!   output → frames due), the alarm output (a pure function of the
+//!   status), the 1 ms deadline and the watchdog supervisor;
+//! - `protocol`: the CAN frames.
 #![no_std]
 #![deny(missing_docs)]
 // `!(x > 0.0)` is deliberate throughout: it is true for NaN, which must be
@@ -29,6 +35,7 @@ pub(crate) mod decision;
 pub mod device;
 pub(crate) mod estimation;
 mod hypothesis;
+mod leak;
 mod monitor;
 pub mod params;
 pub mod physics;
@@ -41,7 +48,9 @@ pub mod status;
 mod testutil;
 
 pub use decision::acknowledge;
+pub use decision::latch::AckOutcome;
 pub use hypothesis::Hypothesis;
+pub use leak::{Leak, LeakSet, PerLeak};
 pub use monitor::{FilterState, Monitor};
 pub use params::Params;
 pub use real::Real;

@@ -2,6 +2,7 @@
 //! status. Deterministic: the same samples give the same statuses, bit for
 //! bit, on any IEEE-754 machine (see `real.rs`).
 
+use crate::decision::latch::AckOutcome;
 use crate::decision::Decision;
 use crate::estimation::bank::{
     external_index, internal_index, Bank, BankOutput, HypothesisFilter, Measurement, ProcessNoise,
@@ -157,10 +158,13 @@ impl<T: Real> Monitor<T> {
         })
     }
 
-    /// Acknowledge and clear a latched leak alarm. It is raised again if the
-    /// evidence still holds after the debounce time.
-    pub fn clear_alarm(&mut self) -> bool {
-        self.decision.clear()
+    /// An operator's acknowledgement of the latched leak alarm (the CAN
+    /// command, a button). Whether it is accepted is the decision layer's
+    /// acknowledge policy (`decision::latch`); when it is, the latch is
+    /// cleared, and a leak that is still there is raised again after the
+    /// debounce time. Apply it between two [`step`](Self::step)s.
+    pub fn acknowledge(&mut self) -> AckOutcome {
+        self.decision.acknowledge()
     }
 
     /// Process one sample.
@@ -370,28 +374,30 @@ impl<T: Real> Monitor<T> {
         if self.bank.is_none() || flags & unsettled != 0 || !d.conclusive() {
             flags |= health::INCONCLUSIVE;
         }
+        let latched = d.latched();
         let verdict = if required_fault {
             Verdict::SensorFault
-        } else if d.verdict().is_leak() {
-            d.verdict()
+        } else if !latched.is_empty() {
+            Verdict::of_leaks(latched)
         } else if flags & health::INCONCLUSIVE != 0 {
             Verdict::Inconclusive
         } else {
             Verdict::Healthy
         };
         let estimating = self.bank.is_some() && flags & health::WARMING_UP == 0;
-        let ([li, le], [sdi, sde]) = d.leak_flows();
-        let [fi, fe] = d.detection_flows();
+        let (size, sd) = d.leak_flows();
+        let detect = d.detection_flows();
         Status {
             t_s,
             verdict,
+            latched,
             leading: d.leading(),
-            leak_internal_lpm: estimating.then_some(li),
-            leak_external_lpm: estimating.then_some(le),
-            leak_internal_sd_lpm: estimating.then_some(sdi),
-            leak_external_sd_lpm: estimating.then_some(sde),
-            detect_internal_lpm: estimating.then_some(fi),
-            detect_external_lpm: estimating.then_some(fe),
+            leak_internal_lpm: estimating.then_some(size.internal()),
+            leak_external_lpm: estimating.then_some(size.external()),
+            leak_internal_sd_lpm: estimating.then_some(sd.internal()),
+            leak_external_sd_lpm: estimating.then_some(sd.external()),
+            detect_internal_lpm: estimating.then_some(detect.internal()),
+            detect_external_lpm: estimating.then_some(detect.external()),
             valve_gain_deviation: d.valve(),
             evidence_weight: self.quiet.weight().to_f32(),
             evidence: d.evidence(),

@@ -1,6 +1,7 @@
 //! What the monitor reports after each sample.
 
 use crate::hypothesis::Hypothesis;
+use crate::leak::LeakSet;
 use crate::sample::Channel;
 
 /// The monitor's verdict.
@@ -39,17 +40,34 @@ impl Verdict {
 
     /// The leak verdict for an internal and/or an external leak.
     pub const fn from_leaks(internal: bool, external: bool) -> Self {
-        match (internal, external) {
-            (true, true) => Self::Both,
-            (true, false) => Self::Internal,
-            (false, true) => Self::External,
-            (false, false) => Self::Healthy,
+        Self::of_leaks(LeakSet::of(internal, external))
+    }
+
+    /// The verdict naming `leaks` (`Healthy` for none).
+    pub const fn of_leaks(leaks: LeakSet) -> Self {
+        // The codes agree (`LeakSet::code` is 0..=3): an identity map.
+        match leaks.code() & 3 {
+            0 => Self::Healthy,
+            1 => Self::Internal,
+            2 => Self::External,
+            _ => Self::Both,
+        }
+    }
+
+    /// The leaks this verdict names (none for healthy, sensor fault and
+    /// inconclusive).
+    pub const fn leaks(self) -> LeakSet {
+        match self {
+            Self::Internal => LeakSet::INTERNAL,
+            Self::External => LeakSet::EXTERNAL,
+            Self::Both => LeakSet::BOTH,
+            Self::Healthy | Self::SensorFault | Self::Inconclusive => LeakSet::NONE,
         }
     }
 
     /// Is this a leak alarm?
     pub const fn is_leak(self) -> bool {
-        matches!(self, Self::Internal | Self::External | Self::Both)
+        !self.leaks().is_empty()
     }
 }
 
@@ -127,6 +145,9 @@ pub struct Status {
     /// temperature sensor is reported in `faulted_channels`, `health` and
     /// the events, but leaves the verdict to the estimation.
     pub verdict: Verdict,
+    /// The leak alarms latched until acknowledged. Shown in the verdict
+    /// unless a required sensor is faulted; kept through the fault.
+    pub latched: LeakSet,
     /// The best-supported hypothesis right now, before debounce and latching.
     pub leading: Hypothesis,
     /// Estimated internal leak flow, l/min, averaged over the evidence

@@ -12,10 +12,10 @@
 //!   12-bit conversions. The board splits it into 4 codes that differ by
 //!   at most 1. A missing reading becomes 0 (a dead loop).
 //! - `NAME.reference.bin`: per sample, what the host computes from those
-//!   codes by the estimator's sequence (front end → acknowledge if one is
-//!   applied at this sample → `Monitor::step` → `AlarmLogic::update`):
-//!   the status, detail and alarm frames built from it (8 bytes each,
-//!   E2E-protected with counter 0), 24 bytes per sample.
+//!   codes through the firmware's own pipeline, `monitor::device::
+//!   Estimator::on_block` (with the acknowledge command at the sample the
+//!   test sends it): the status, detail and alarm frames it gives (8 bytes
+//!   each, E2E-protected with counter 0), 24 bytes per sample.
 //!
 //! and a Rust source with one `EmuCase` per golden case (the list of
 //! alarm changes, the monitor's events, the sample at which the test
@@ -29,11 +29,10 @@ use golden::canon::event_code;
 use golden::expected::Expected;
 use golden::input::Input;
 use golden::params::golden_params;
-use monitor::device::alarm::{AlarmLogic, LeakKind};
-use monitor::device::deadline::SampleClock;
-use monitor::protocol::{AlarmFrame, DetailFrame, Encoder, Message, StatusFrame};
-use monitor::signal::frontend::{average_scans, Frontend, FrontendConfig, Input as FrontInput};
-use monitor::{Channel, Monitor, Sample};
+use monitor::device::estimator::{Estimator, Inputs};
+use monitor::protocol::{AlarmFrame, Command, Encoder, Message};
+use monitor::signal::frontend::{FrontendConfig, Input as FrontInput};
+use monitor::{Channel, Sample};
 
 /// Scans per 1 ms block (`firmware::board_map::SCANS_PER_SAMPLE`; the
 /// target checks they agree).
@@ -91,10 +90,10 @@ struct Run {
 
 fn run(input: &Input<'_>, codes: &[[u16; 7]], frontend: FrontendConfig, ack: Option<u32>) -> Run {
     let params = golden_params(input.sample_period_s, input.warm_up_s);
-    let mut monitor = Monitor::<f32>::new(&params).expect("golden parameters");
-    let mut frontend = Frontend::new(frontend);
-    let mut clock = SampleClock::new(SAMPLE_PERIOD_US);
-    let mut alarm = AlarmLogic::new();
+    // The cycle budget only matters for the load report, not sent here.
+    let mut estimator =
+        Estimator::<f32>::new(&params, frontend, SAMPLE_PERIOD_US, SAMPLE_PERIOD_US * 1000)
+            .expect("golden parameters");
     let mut out = Run {
         reference: Vec::with_capacity(codes.len() * REFERENCE_RECORD),
         alarms: Vec::new(),
@@ -102,26 +101,22 @@ fn run(input: &Input<'_>, codes: &[[u16; 7]], frontend: FrontendConfig, ack: Opt
     };
     for (k, sums) in codes.iter().enumerate() {
         let k = k as u32;
-        let index = clock.next_index();
-        let t_ms = clock.t_ms(index);
-        let acquired = frontend.convert(clock.t_s(index), &average_scans(&block(sums)));
-        if ack == Some(k) {
-            alarm.acknowledge(&mut monitor);
-        }
-        let status = monitor.step(&acquired.sample);
-        for e in &status.events {
+        let inputs = Inputs {
+            command: (ack == Some(k)).then_some(Command::AcknowledgeAlarm),
+            ..Inputs::default()
+        };
+        let o = estimator.on_block(&block(sums), &inputs);
+        for e in &o.status.events {
             out.events.push((k, event_code(e)));
         }
-        let changed = alarm.update(&status, t_ms as u32);
-        let frame = AlarmFrame::from_logic(&alarm);
-        if changed || k == 0 {
-            out.alarms.push((k, frame));
+        if o.alarm_changed || o.first {
+            out.alarms.push((k, o.alarm_frame));
         }
         out.reference
-            .extend(protect(Message::Status(StatusFrame::from_status(&status))));
+            .extend(protect(Message::Status(o.status_frame())));
         out.reference
-            .extend(protect(Message::Detail(DetailFrame::from_status(&status))));
-        out.reference.extend(protect(Message::Alarm(frame)));
+            .extend(protect(Message::Detail(o.detail_frame())));
+        out.reference.extend(protect(Message::Alarm(o.alarm_frame)));
     }
     out
 }
@@ -149,7 +144,7 @@ pub fn case(
     // A latched leak is acknowledged a little after the last alarm change.
     let plain = run(&input, &codes, frontend, None);
     let last = plain.alarms.last().expect("sample 0");
-    let ack = (last.1.latched != LeakKind::None)
+    let ack = (!last.1.latched.is_empty())
         .then_some(last.0 + ACK_AFTER_MS)
         .filter(|&k| k + ACK_MIN_LEFT_MS <= n);
     let r = if ack.is_some() {

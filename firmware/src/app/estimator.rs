@@ -1,40 +1,42 @@
-//! The estimator task (high priority): one ADC block per millisecond →
-//! front end (codes → units, NE43) → `Monitor::step` → alarm logic →
-//! relay → frames due. It never waits for anything but the next block:
-//! frames go into the outbox, log lines into a queue.
+//! The estimator task (high priority): moves one ADC block per millisecond
+//! through `monitor::device::Estimator` (front end → acknowledge →
+//! `Monitor::step` → alarm output → frames due) and carries out what it
+//! returns: relay, frames into the outbox, log lines into a queue. It
+//! decides nothing itself and never waits for anything but the next block.
 
 use core::sync::atomic::Ordering;
 
 use embassy_time::Instant;
-use monitor::device::alarm::AlarmLogic;
-use monitor::device::deadline::{DeadlineMonitor, SampleClock};
-use monitor::protocol::schedule::FrameScheduler;
-use monitor::protocol::{AlarmFrame, Command, DetailFrame, HeartbeatFrame, Message, StatusFrame};
-use monitor::signal::frontend::{average_scans, Frontend, FrontendConfig};
-use monitor::Monitor;
+use monitor::device::estimator::{Estimator, Inputs};
+use monitor::params::{ParamError, Params};
+use monitor::protocol::{HeartbeatFrame, Message};
+use monitor::signal::frontend::FrontendConfig;
 
 use super::shared::{LogEvent, Shared};
 use super::SAMPLE_PERIOD_US;
 use crate::board::{BootInfo, CycleCounter, Overrun, RelayOutput, SampleSource};
 
-/// Run the estimator for ever. The relay starts de-energised. The monitor
-/// is borrowed (it lives in a static): a 3.6 KiB value moved into the
-/// task would be copied through the stack and stored twice.
+/// The pipeline for the installation `params` on a board with the
+/// analogue front end `frontend` and the cycle counter `C`.
+pub fn pipeline<C: CycleCounter>(
+    params: &Params,
+    frontend: FrontendConfig,
+) -> Result<Estimator<f32>, ParamError> {
+    Estimator::new(params, frontend, SAMPLE_PERIOD_US, C::CYCLES_PER_SAMPLE)
+}
+
+/// Run the estimator for ever. The relay starts de-energised. The
+/// pipeline is borrowed (it lives in a static): a 3.6 KiB value moved
+/// into the task would be copied through the stack and stored twice.
 pub async fn run<S: SampleSource, R: RelayOutput, C: CycleCounter>(
     mut source: S,
     relay: &R,
     cycles: C,
-    monitor: &mut Monitor<f32>,
-    frontend: FrontendConfig,
+    estimator: &mut Estimator<f32>,
     boot: BootInfo,
     shared: &Shared,
 ) -> ! {
     relay.set_energised(false);
-    let mut frontend = Frontend::new(frontend);
-    let mut clock = SampleClock::new(SAMPLE_PERIOD_US);
-    let mut deadline = DeadlineMonitor::new(C::CYCLES_PER_SAMPLE);
-    let mut alarm = AlarmLogic::new();
-    let mut schedule = FrameScheduler::new();
     let mut first_block: Option<Instant> = None;
     let mut overran = false;
     let mut dropped_before = shared.can.dropped.load(Ordering::Relaxed);
@@ -49,69 +51,58 @@ pub async fn run<S: SampleSource, R: RelayOutput, C: CycleCounter>(
         let start = cycles.cycles();
         // The sample clock counts samples; the timer is read only to date
         // the first block and to resynchronise after an overrun.
-        let first = first_block.is_none();
-        if first {
+        let t0 = *first_block.get_or_insert_with(|| {
             let now = Instant::now();
             shared
                 .first_sample_ms
                 .store(now.as_millis() as u32, Ordering::Release);
-            first_block = Some(now);
-        }
-        let lost = core::mem::take(&mut overran).then(|| {
-            let since_first =
-                first_block.map_or(0, |t0| Instant::now().duration_since(t0).as_micros());
-            let lost = clock.resync(since_first);
-            deadline.overrun(lost);
-            lost
+            now
         });
-        let index = clock.next_index();
-        let t_ms = clock.t_ms(index);
-        if let Some(lost) = lost {
+        let inputs = Inputs {
+            command: shared.commands.try_take(),
+            stalled: shared.stalled.load(Ordering::Acquire),
+            overrun_at_us: core::mem::take(&mut overran)
+                .then(|| Instant::now().duration_since(t0).as_micros()),
+        };
+        let out = estimator.on_block(raw, &inputs);
+        let t_ms = out.t_ms;
+        relay.set_energised(out.relay_energised());
+
+        if let Some(lost) = out.lost {
             shared.log(LogEvent::Overrun { t_ms, lost });
         }
-        let acquired = frontend.convert(clock.t_s(index), &average_scans(raw));
-
-        if let Some(Command::AcknowledgeAlarm) = shared.commands.try_take() {
-            let was_latched = alarm.acknowledge(monitor);
+        if let Some(outcome) = out.acknowledged {
+            let was_latched = outcome.cleared_a_leak();
             shared.log(LogEvent::Acknowledged { t_ms, was_latched });
         }
-        let status = monitor.step(&acquired.sample);
-        for &event in status.events.iter() {
+        for &event in out.status.events.iter() {
             shared.log(LogEvent::Monitor { t_ms, event });
         }
-
-        let stalled = shared.stalled.load(Ordering::Acquire);
-        if stalled {
-            alarm.estimator_stalled(t_ms as u32);
-        }
-        let changed = alarm.update(&status, t_ms as u32);
-        let output = alarm.output();
-        // Belt and braces: a stalled estimator's relay stays off whatever
-        // the alarm logic says.
-        relay.set_energised(output.relay_energised() && !stalled);
-        if changed || first {
+        if out.alarm_changed || out.first {
             // The frame and the LED state only change with the output.
             shared
                 .alarm_state
-                .store(output.state.code(), Ordering::Relaxed);
-            shared.set_last_alarm(AlarmFrame::from_logic(&alarm));
+                .store(out.alarm.state.code(), Ordering::Relaxed);
+            shared.set_last_alarm(out.alarm_frame);
         }
-        if changed {
-            shared.log(LogEvent::Alarm { t_ms, output });
+        if out.alarm_changed {
+            shared.log(LogEvent::Alarm {
+                t_ms,
+                output: out.alarm,
+            });
         }
 
-        let due = schedule.due(t_ms, changed);
-        if due.alarm {
-            shared.post(Message::Alarm(AlarmFrame::from_logic(&alarm)));
+        if out.due.alarm {
+            shared.post(Message::Alarm(out.alarm_frame));
         }
-        if due.status {
-            shared.post(Message::Status(StatusFrame::from_status(&status)));
+        if out.due.status {
+            shared.post(Message::Status(out.status_frame()));
         }
-        if due.detail {
-            shared.post(Message::Detail(DetailFrame::from_status(&status)));
+        if out.due.detail {
+            shared.post(Message::Detail(out.detail_frame()));
         }
-        if due.heartbeat {
-            let report = deadline.take_report();
+        if out.due.heartbeat {
+            let report = estimator.take_load_report();
             let dropped = shared.can.dropped.load(Ordering::Relaxed);
             shared.post(Message::Heartbeat(HeartbeatFrame::new(
                 boot.reset_cause,
@@ -123,12 +114,12 @@ pub async fn run<S: SampleSource, R: RelayOutput, C: CycleCounter>(
             shared.set_load(report);
         }
 
-        deadline.processed(cycles.cycles().wrapping_sub(start));
+        estimator.processed(cycles.cycles().wrapping_sub(start));
         shared
             .processed
-            .store(deadline.processed_total(), Ordering::Release);
+            .store(estimator.processed_total(), Ordering::Release);
         shared
             .missed
-            .store(deadline.missed_total(), Ordering::Release);
+            .store(estimator.missed_total(), Ordering::Release);
     }
 }

@@ -37,7 +37,7 @@ pub enum LogEvent {
     Acknowledged {
         /// Sample time, ms.
         t_ms: u64,
-        /// Whether a leak was latched.
+        /// Whether it cleared a latched leak.
         was_latched: bool,
     },
     /// An acknowledge attempt: accepted, or rejected with its reason

@@ -8,6 +8,7 @@ use core::sync::atomic::Ordering;
 
 use embassy_time::{Duration, Instant, Ticker};
 use monitor::device::alarm::AlarmState;
+use monitor::device::estimator::stall;
 use monitor::device::supervisor::{Supervision, Supervisor, SupervisorConfig};
 use monitor::protocol::Message;
 
@@ -76,12 +77,13 @@ pub async fn run<W: Watchdog, R: RelayOutput, L: StatusLed>(
             Supervision::Withhold => {}
             Supervision::Stalled => {
                 if !shared.stalled.swap(true, Ordering::AcqRel) {
-                    relay.set_energised(false);
+                    let stall = stall(shared.last_alarm(), shared.sample_clock_ms(now_ms));
+                    relay.set_energised(stall.output.relay_energised());
                     shared
                         .alarm_state
-                        .store(AlarmState::EstimatorStalled.code(), Ordering::Relaxed);
-                    if let Some(last) = shared.last_alarm() {
-                        shared.post(Message::Alarm(last.stalled(shared.sample_clock_ms(now_ms))));
+                        .store(stall.output.state.code(), Ordering::Relaxed);
+                    if let Some(frame) = stall.frame {
+                        shared.post(Message::Alarm(frame));
                     }
                     defmt::error!(
                         "estimator stalled after {} samples: relay off, watchdog no longer fed",

@@ -165,6 +165,15 @@ pub enum CalibrationError {
     /// The starting parameters (or the fitted ones) are invalid.
     #[error("{0}")]
     Params(monitor::params::ParamError),
+    /// The finished fit is outside the parameters' physical bounds (or
+    /// inconsistent): nothing is written.
+    #[error("the fitted parameters cannot be used: {error}")]
+    InvalidFit {
+        /// The first offending field (boxed: keeps every `Result` small).
+        error: Box<monitor::params::ParamError>,
+        /// The report so far.
+        report: String,
+    },
 }
 
 impl CalibrationError {
@@ -173,7 +182,8 @@ impl CalibrationError {
         match self {
             Self::NotEnoughMotion { report, .. }
             | Self::PoorFit { report, .. }
-            | Self::ValidationFailed { report, .. } => Some(report),
+            | Self::ValidationFailed { report, .. }
+            | Self::InvalidFit { report, .. } => Some(report),
             _ => None,
         }
     }
@@ -893,10 +903,27 @@ fn calibrate_with(
             alarm.max(floor[1]),
         ));
     }
-    Ok(cal)
+    cal.checked()
 }
 
 impl Calibration {
+    /// The calibration if its parameters pass [`Params::validate`] (the
+    /// monitor's own check, as `replay` and the firmware build apply it);
+    /// else refused, naming the field: a fit that leaves the physical
+    /// bounds is never written.
+    pub fn checked(mut self) -> Result<Self, CalibrationError> {
+        match self.params.validate() {
+            Ok(()) => Ok(self),
+            Err(error) => {
+                self.refused = Some(format!("the fitted parameters fail validation: {error}"));
+                Err(CalibrationError::InvalidFit {
+                    error: Box::new(error),
+                    report: self.report(),
+                })
+            }
+        }
+    }
+
     /// The whole report: fits, noise, validation, warnings, verdict (the
     /// TOML header).
     pub fn report(&self) -> String {

@@ -11,10 +11,11 @@
 //!    the excess clipped to [−1, 4]. The alarm is raised when g reaches
 //!    `debounce_s`: after 1 s at twice the alarm level, ¼ s at five times,
 //!    5 s at 1.2 times; a reading that only touches the level never
-//!    alarms. Alarms latch until acknowledged; a new leak while one is
-//!    latched escalates the verdict (internal + external = both). The
-//!    warning flag has hysteresis: on at `warning_lpm`, off below 80 % of
-//!    it.
+//!    alarms. Raised leaks go to the one leak-alarm latch ([`latch`]):
+//!    they stay until acknowledged, and a new leak while one is latched
+//!    escalates (internal + external = both). The warning flag has
+//!    hysteresis: on at `warning_lpm`, off below 80 %
+//!    ([`WARNING_RELEASE`]) of it.
 //!
 //! 2. **Model probabilities.** Each filter's log-likelihood, tempered by the
 //!    residual correlation time (consecutive residuals of a physical model
@@ -40,14 +41,27 @@
 //! installation's healthy baseline for the current operating region
 //! (`params::Baseline`), times the pressure difference. Reported sizes
 //! are never negative.
+//!
+//! **Changing the decision rule** happens here: the evidence and its
+//! thresholds in [`Decision::update`] (the user's settings are
+//! `params::AlarmConfig` and the evidence part of `params::FilterTuning`;
+//! the fixed constants are the named consts below), latching and the
+//! acknowledge policy in [`latch`]. `Monitor` only decides what counts as
+//! evidence (warm-up, suspect readings, filter resets) and lets a
+//! required sensor's fault take the verdict; `device::alarm` maps the
+//! resulting status to the relay and does not decide anything.
+
+pub mod latch;
 
 pub mod acknowledge;
 
 use crate::estimation::bank::FilterOutput;
 use crate::hypothesis::Hypothesis;
+use crate::leak::{Leak, LeakSet, PerLeak};
 use crate::params::Params;
 use crate::real::Real;
 use crate::status::{health, Event, Events, Evidence, Verdict};
+use latch::{AckOutcome, Latch};
 
 /// Mean NIS of the best filter above which the model is flagged as not
 /// fitting (χ²₃ has mean 3).
@@ -60,6 +74,25 @@ const ALARM_SIGMAS: f64 = 2.0;
 const BASELINE_SMOOTHING_S: f64 = 1.0;
 /// Lowest probability any hypothesis is given.
 const PROBABILITY_FLOOR: f64 = 1e-4;
+/// Mean NIS a filter starts from (χ²₃ has mean 3: a fitting model).
+const NIS_START: f64 = 3.0;
+/// Probability of each of the four hypotheses at a (re)start.
+const PROBABILITY_START: f64 = 0.25;
+/// Most negative log-likelihood difference to the best hypothesis that is
+/// exponentiated (exp(−30) ≈ 1e−13 never underflows, even in f32).
+const LOGLIK_SPREAD_MAX: f64 = 30.0;
+/// The CUSUM's relative excess over the alarm level is clipped to
+/// [−1, `EXCESS_MAX`]: one huge reading cannot raise the alarm on its own.
+const EXCESS_MAX: f64 = 4.0;
+/// The warning goes off when both leaks fall below this fraction of their
+/// warning level (hysteresis).
+const WARNING_RELEASE: f64 = 0.8;
+/// Cap of the evidence-time counter, s: it only has to reach
+/// `min_evidence_s`.
+const EVIDENCE_CAP_S: f64 = 1.0e4;
+/// A sample whose evidence weight is below this is reported as
+/// `EVIDENCE_PAUSED`.
+const PAUSED_WEIGHT: f64 = 0.5;
 
 /// Decision state.
 #[derive(Clone, Debug)]
@@ -70,34 +103,38 @@ pub struct Decision<T> {
     penalty: T,
     loglik: [T; 4],
     nis: [T; 4],
-    /// Leak flows (internal, external) of the `both` filter, l/min: fast
-    /// and slow averages, and the slow average of their 1σ.
-    fast: [T; 2],
+    /// Leak flows of the `both` filter, l/min: fast and slow averages, and
+    /// the slow average of their 1σ.
+    fast: PerLeak<T>,
     /// Fast average of the flows less `ALARM_SIGMAS` σ: what the alarm sees.
-    fast_lower: [T; 2],
-    slow: [T; 2],
-    slow_sd: [T; 2],
-    persist: [T; 2],
-    raised: [bool; 2],
+    fast_lower: PerLeak<T>,
+    slow: PerLeak<T>,
+    slow_sd: PerLeak<T>,
+    /// CUSUM per leak, s of evidence time.
+    persist: PerLeak<T>,
+    /// Leaks whose CUSUM reached the debounce time since the last
+    /// (re)start or acknowledgement.
+    raised: PerLeak<bool>,
     valve: [T; 2],
     probability: [T; 4],
     leading: Hypothesis,
-    latched: Verdict,
+    /// The one leak-alarm latch of the crate.
+    latch: Latch,
     warning: bool,
     mismatch: bool,
-    /// Alarm and warning levels per leak (internal, external), l/min: the
-    /// user's levels, raised to the installation's detection floor.
-    alarm_lpm: [T; 2],
-    warning_lpm: [T; 2],
+    /// Alarm and warning levels per leak, l/min: the user's levels, raised
+    /// to the installation's detection floor.
+    alarm_lpm: PerLeak<T>,
+    warning_lpm: PerLeak<T>,
     debounce_s: T,
     min_probability: T,
-    /// Per leak (internal, external): the healthy baseline coefficient per
-    /// region (retracting, holding, extending), l/min at 10 bar.
-    baseline: [[T; 3]; 2],
+    /// Per leak: the healthy baseline coefficient per region (retracting,
+    /// holding, extending), l/min at 10 bar.
+    baseline: PerLeak<[T; 3]>,
     /// The baseline in use: follows the current region's with
     /// [`BASELINE_SMOOTHING_S`] (the leak states move slowly from one
     /// region's apparent value to the next; a step would be a false flow).
-    baseline_now: [T; 2],
+    baseline_now: PerLeak<T>,
     /// Evidence-weighted time since the filters (re)started, s (capped).
     evidence_s: T,
     /// Recent average of the evidence weight (0 while not valid), as an
@@ -118,44 +155,43 @@ impl<T: Real> Decision<T> {
     /// Decision state for `params`' thresholds.
     pub fn new(params: &Params) -> Self {
         let f = &params.filter;
+        let [floor_internal, floor_external] = params.baseline.detection_floor_lpm;
+        let floor = PerLeak::new(floor_internal, floor_external);
         Self {
             slow_s: T::c(f.evidence_window_s),
             fast_s: T::c(f.detection_window_s),
             temper: T::c(1.0 / f.residual_correlation_samples),
             penalty: T::c(f.complexity_penalty_per_s),
             loglik: [T::ZERO; 4],
-            nis: [T::c(3.0); 4],
-            fast: [T::ZERO; 2],
-            fast_lower: [T::ZERO; 2],
-            slow: [T::ZERO; 2],
-            slow_sd: [T::ZERO; 2],
-            persist: [T::ZERO; 2],
-            raised: [false; 2],
+            nis: [T::c(NIS_START); 4],
+            fast: PerLeak::splat(T::ZERO),
+            fast_lower: PerLeak::splat(T::ZERO),
+            slow: PerLeak::splat(T::ZERO),
+            slow_sd: PerLeak::splat(T::ZERO),
+            persist: PerLeak::splat(T::ZERO),
+            raised: PerLeak::splat(false),
             valve: [T::ZERO; 2],
-            probability: [T::c(0.25); 4],
+            probability: [T::c(PROBABILITY_START); 4],
             leading: Hypothesis::Healthy,
-            latched: Verdict::Healthy,
+            latch: Latch::new(),
             warning: false,
             mismatch: false,
-            alarm_lpm: params
-                .baseline
-                .detection_floor_lpm
-                .map(|floor| T::c(params.alarm.alarm_lpm.max(floor))),
-            warning_lpm: params.baseline.detection_floor_lpm.map(|floor| {
+            alarm_lpm: floor.map(|floor| T::c(params.alarm.alarm_lpm.max(floor))),
+            warning_lpm: floor.map(|floor| {
                 // The warning keeps its ratio to the alarm level.
                 let a = &params.alarm;
                 T::c(a.warning_lpm * a.alarm_lpm.max(floor) / a.alarm_lpm)
             }),
             debounce_s: T::c(params.alarm.debounce_s),
             min_probability: T::c(params.alarm.min_probability),
-            baseline: [
+            baseline: PerLeak::new(
                 params.baseline.internal_lpm_per_10bar.map(T::c),
                 params.baseline.external_lpm_per_10bar.map(T::c),
-            ],
-            baseline_now: [
+            ),
+            baseline_now: PerLeak::new(
                 T::c(params.baseline.internal_lpm_per_10bar[1]),
                 T::c(params.baseline.external_lpm_per_10bar[1]),
-            ],
+            ),
             evidence_s: T::ZERO,
             recent_weight: T::ZERO,
             recent_time: T::ZERO,
@@ -170,14 +206,14 @@ impl<T: Real> Decision<T> {
     /// Forget the evidence (filters restarted); a latched alarm stays.
     pub fn restart(&mut self) {
         self.loglik = [T::ZERO; 4];
-        self.nis = [T::c(3.0); 4];
-        self.fast = [T::ZERO; 2];
-        self.fast_lower = [T::ZERO; 2];
-        self.slow = [T::ZERO; 2];
-        self.slow_sd = [T::ZERO; 2];
-        self.persist = [T::ZERO; 2];
-        self.raised = [false; 2];
-        self.probability = [T::c(0.25); 4];
+        self.nis = [T::c(NIS_START); 4];
+        self.fast = PerLeak::splat(T::ZERO);
+        self.fast_lower = PerLeak::splat(T::ZERO);
+        self.slow = PerLeak::splat(T::ZERO);
+        self.slow_sd = PerLeak::splat(T::ZERO);
+        self.persist = PerLeak::splat(T::ZERO);
+        self.raised = PerLeak::splat(false);
+        self.probability = [T::c(PROBABILITY_START); 4];
         self.leading = Hypothesis::Healthy;
         self.warning = false;
         self.mismatch = false;
@@ -194,14 +230,17 @@ impl<T: Real> Decision<T> {
             && !self.mismatch
     }
 
-    /// Clear a latched alarm; returns whether one was latched. It is raised
-    /// again if the evidence still holds for the debounce time.
-    pub fn clear(&mut self) -> bool {
-        let was = self.latched.is_leak();
-        self.latched = Verdict::Healthy;
-        self.persist = [T::ZERO; 2];
-        self.raised = [false; 2];
-        was
+    /// An operator's acknowledgement: the latch decides whether it is
+    /// accepted ([`Latch::acknowledge`]). When it is, the latched leaks
+    /// are cleared and the CUSUMs start over: a leak that is still there
+    /// is raised again after the debounce time.
+    pub fn acknowledge(&mut self) -> AckOutcome {
+        let outcome = self.latch.acknowledge();
+        if let AckOutcome::Cleared(_) = outcome {
+            self.persist = PerLeak::splat(T::ZERO);
+            self.raised = PerLeak::splat(false);
+        }
+        outcome
     }
 
     /// Take one sample's filter outputs (`None`: that filter was reset).
@@ -229,7 +268,7 @@ impl<T: Real> Decision<T> {
         self.recent_weight += a_recent * (counted - self.recent_weight);
         self.recent_time += a_recent * (T::ONE - self.recent_time);
         // Capped: it only has to reach `min_evidence_s`.
-        self.evidence_s = (self.evidence_s + dt * counted).min(T::c(1.0e4));
+        self.evidence_s = (self.evidence_s + dt * counted).min(T::c(EVIDENCE_CAP_S));
         // Evidence time: a sample counts in proportion to how quasi-steady
         // the plant is (`weight`, the learning weight). During fast moves a
         // small coefficient error times a large pressure difference would
@@ -244,23 +283,23 @@ impl<T: Real> Decision<T> {
         if let Some(both) = &out[Hypothesis::Both as usize] {
             self.valve = both.valve_gain;
             let a_base = (dt / T::c(BASELINE_SMOOTHING_S)).min(T::ONE);
-            for k in 0..2 {
-                self.baseline_now[k] += a_base * (self.baseline[k][region] - self.baseline_now[k]);
+            for k in Leak::ALL {
+                follow(&mut self.baseline_now[k], a_base, self.baseline[k][region]);
             }
-            let flows = [
-                both.flow_internal_lpm - self.baseline_now[0] * both.dp_10bar[0],
-                both.flow_external_lpm - self.baseline_now[1] * both.dp_10bar[1],
-            ];
-            let sds = [both.flow_internal_sd_lpm, both.flow_external_sd_lpm];
-            for k in 0..2 {
-                self.fast[k] += a_fast * (flows[k] - self.fast[k]);
+            let flows = PerLeak::new(
+                both.flow_internal_lpm - self.baseline_now[Leak::Internal] * both.dp_10bar[0],
+                both.flow_external_lpm - self.baseline_now[Leak::External] * both.dp_10bar[1],
+            );
+            let sds = PerLeak::new(both.flow_internal_sd_lpm, both.flow_external_sd_lpm);
+            for k in Leak::ALL {
+                follow(&mut self.fast[k], a_fast, flows[k]);
                 // The alarm looks at the lower confidence bound: a leak
                 // estimate the filter is still unsure of (after a start,
                 // across a transient) does not alarm however large.
                 let lower = flows[k] - T::c(ALARM_SIGMAS) * sds[k];
-                self.fast_lower[k] += a_fast * (lower - self.fast_lower[k]);
-                self.slow[k] += a_slow * (flows[k] - self.slow[k]);
-                self.slow_sd[k] += a_slow * (sds[k] - self.slow_sd[k]);
+                follow(&mut self.fast_lower[k], a_fast, lower);
+                follow(&mut self.slow[k], a_slow, flows[k]);
+                follow(&mut self.slow_sd[k], a_slow, sds[k]);
             }
         }
         if !valid {
@@ -269,50 +308,49 @@ impl<T: Real> Decision<T> {
         self.update_probabilities(out, dt_w, weight, a_evidence);
 
         // CUSUM on the relative excess over the alarm level, per leak.
-        let mut new_leak = [false; 2];
-        for k in 0..2 {
+        let mut new_leak = false;
+        for k in Leak::ALL {
             let excess = if self.supports(k) {
                 ((self.fast_lower[k] - self.alarm_lpm[k]) / self.alarm_lpm[k])
-                    .clamp_to(-T::ONE, T::c(4.0))
+                    .clamp_to(-T::ONE, T::c(EXCESS_MAX))
             } else {
                 -T::ONE
             };
             self.persist[k] = (self.persist[k] + excess * dt_w).max(T::ZERO);
             if self.persist[k] >= self.debounce_s && !self.raised[k] {
                 self.raised[k] = true;
-                new_leak[k] = true;
+                new_leak = true;
             }
         }
-        if new_leak[0] || new_leak[1] {
-            let found = Verdict::from_leaks(self.raised[0], self.raised[1]);
-            let merged = merge(self.latched, found);
-            if merged != self.latched {
-                self.latched = merged;
-                let _ = events.push(Event::AlarmRaised(merged));
+        if new_leak {
+            if let Some(latched) = self.latch.raise(self.raised.set()) {
+                let _ = events.push(Event::AlarmRaised(Verdict::of_leaks(latched)));
             }
         }
         // Each leak against its own warning level, with hysteresis.
-        let over = |k: usize, scale: T| self.slow[k] >= self.warning_lpm[k] * scale;
-        let level_reached = over(0, T::ONE) || over(1, T::ONE);
-        let still = over(0, T::c(0.8)) || over(1, T::c(0.8));
-        self.warning = !self.latched.is_leak() && (level_reached || (self.warning && still));
+        let over = |k: Leak, scale: T| self.slow[k] >= self.warning_lpm[k] * scale;
+        let level_reached = over(Leak::Internal, T::ONE) || over(Leak::External, T::ONE);
+        let release = T::c(WARNING_RELEASE);
+        let still = over(Leak::Internal, release) || over(Leak::External, release);
+        self.warning =
+            self.latch.latched().is_empty() && (level_reached || (self.warning && still));
         self.mismatch = self.nis[self.leading as usize] > T::c(MISMATCH_NIS);
-        if weight < T::c(0.5) {
+        if weight < T::c(PAUSED_WEIGHT) {
             health::EVIDENCE_PAUSED
         } else {
             0
         }
     }
 
-    /// Do the model probabilities support leak `k` (0 internal, 1 external)?
-    fn supports(&self, k: usize) -> bool {
+    /// Do the model probabilities support `leak`: do the hypotheses with
+    /// it (the single-leak one and `both`) hold `min_probability` jointly?
+    fn supports(&self, leak: Leak) -> bool {
         let p = &self.probability;
-        let with = if k == 0 {
-            p[Hypothesis::Internal as usize] + p[Hypothesis::Both as usize]
-        } else {
-            p[Hypothesis::External as usize] + p[Hypothesis::Both as usize]
+        let single = match leak {
+            Leak::Internal => Hypothesis::Internal,
+            Leak::External => Hypothesis::External,
         };
-        with >= self.min_probability
+        p[single as usize] + p[Hypothesis::Both as usize] >= self.min_probability
     }
 
     fn update_probabilities(&mut self, out: &[Option<FilterOutput<T>>; 4], dt_w: T, w: T, a: T) {
@@ -325,11 +363,7 @@ impl<T: Real> Decision<T> {
         for (i, o) in out.iter().enumerate() {
             match o {
                 Some(o) => {
-                    let states = T::c(
-                        (Hypothesis::ALL[i].has_internal() as u8
-                            + Hypothesis::ALL[i].has_external() as u8)
-                            as f64,
-                    );
+                    let states = T::c(Hypothesis::ALL[i].leaks().len() as f64);
                     self.loglik[i] = keep * self.loglik[i] + o.log_likelihood * self.temper * w
                         - self.penalty * states * dt_w;
                     self.nis[i] = keep * self.nis[i] + a * o.nis;
@@ -349,11 +383,11 @@ impl<T: Real> Decision<T> {
         let mut total = T::ZERO;
         for i in 0..4 {
             // exp of a non-positive number, clamped so it never underflows.
-            let d = (self.loglik[i] - self.loglik[best]).max(T::c(-30.0));
+            let d = (self.loglik[i] - self.loglik[best]).max(T::c(-LOGLIK_SPREAD_MAX));
             w[i] = if i == best { T::ONE } else { d.exp() };
             total += w[i];
         }
-        let scale = T::ONE - T::c(4.0) * floor;
+        let scale = T::ONE - T::c(Hypothesis::ALL.len() as f64) * floor;
         for i in 0..4 {
             self.probability[i] = floor + scale * w[i] / total;
         }
@@ -366,7 +400,7 @@ impl<T: Real> Decision<T> {
         if self.warning {
             f |= health::LEAK_WARNING;
         }
-        if self.latched.is_leak() {
+        if !self.latch.latched().is_empty() {
             f |= health::ALARM_LATCHED;
         }
         if self.mismatch {
@@ -375,9 +409,9 @@ impl<T: Real> Decision<T> {
         f
     }
 
-    /// The latched verdict (healthy if none).
-    pub fn verdict(&self) -> Verdict {
-        self.latched
+    /// The latched leaks.
+    pub fn latched(&self) -> LeakSet {
+        self.latch.latched()
     }
 
     /// The hypothesis with the most evidence.
@@ -388,13 +422,12 @@ impl<T: Real> Decision<T> {
     /// Reported leak flows (internal, external) and their 1σ, l/min:
     /// averages over the evidence window, never negative (an estimate
     /// below the healthy baseline is no leak).
-    pub fn leak_flows(&self) -> ([f32; 2], [f32; 2]) {
+    pub fn leak_flows(&self) -> (PerLeak<f32>, PerLeak<f32>) {
+        let size = |k: Leak| self.slow[k].max(T::ZERO).to_f32();
+        let sd = |k: Leak| self.slow_sd[k].to_f32();
         (
-            [
-                self.slow[0].max(T::ZERO).to_f32(),
-                self.slow[1].max(T::ZERO).to_f32(),
-            ],
-            [self.slow_sd[0].to_f32(), self.slow_sd[1].to_f32()],
+            PerLeak::new(size(Leak::Internal), size(Leak::External)),
+            PerLeak::new(sd(Leak::Internal), sd(Leak::External)),
         )
     }
 
@@ -406,11 +439,9 @@ impl<T: Real> Decision<T> {
 
     /// The fast (detection) averages of the leak flows, l/min, never
     /// negative.
-    pub fn detection_flows(&self) -> [f32; 2] {
-        [
-            self.fast[0].max(T::ZERO).to_f32(),
-            self.fast[1].max(T::ZERO).to_f32(),
-        ]
+    pub fn detection_flows(&self) -> PerLeak<f32> {
+        let flow = |k: Leak| self.fast[k].max(T::ZERO).to_f32();
+        PerLeak::new(flow(Leak::Internal), flow(Leak::External))
     }
 
     /// Evidence per hypothesis.
@@ -427,11 +458,9 @@ impl<T: Real> Decision<T> {
     }
 }
 
-/// The union of two leak verdicts.
-fn merge(a: Verdict, b: Verdict) -> Verdict {
-    let internal = matches!(a, Verdict::Internal | Verdict::Both)
-        || matches!(b, Verdict::Internal | Verdict::Both);
-    let external = matches!(a, Verdict::External | Verdict::Both)
-        || matches!(b, Verdict::External | Verdict::Both);
-    Verdict::from_leaks(internal, external)
+/// One step of an exponential average: `x` moves the fraction `a` of the
+/// way to `target`.
+#[inline(always)]
+fn follow<T: Real>(x: &mut T, a: T, target: T) {
+    *x += a * (target - *x);
 }

@@ -9,7 +9,7 @@
 
 /// Which sample a block of ADC data is; sample times for the monitor.
 #[derive(Clone, Debug)]
-pub struct SampleClock {
+pub(crate) struct SampleClock {
     period_us: u32,
     next: u64,
 }
@@ -82,7 +82,7 @@ struct Window {
 
 /// Counts missed samples and measures the estimator's load.
 #[derive(Clone, Debug)]
-pub struct DeadlineMonitor {
+pub(crate) struct DeadlineMonitor {
     cycles_per_sample: u32,
     window: Window,
     processed_total: u32,
@@ -167,6 +167,7 @@ impl DeadlineMonitor {
     }
 
     /// ADC overruns since start (wrapping).
+    #[cfg(test)]
     pub fn overruns_total(&self) -> u32 {
         self.overruns_total
     }

@@ -1,7 +1,12 @@
-//! Device concerns around the monitor: the fail-safe relay and alarm state
-//! machine, the 1 ms sample deadline and the watchdog supervisor.
+//! Device concerns around the monitor: the estimator pipeline run once per
+//! ADC block ([`Estimator`]), the alarm output it drives (relay, LED, alarm
+//! frame), the 1 ms sample deadline, the watchdog supervisor and the
+//! device's own diagnostics.
 
 pub mod alarm;
 pub mod deadline;
 pub mod diagnostics;
+pub mod estimator;
 pub mod supervisor;
+
+pub use estimator::{Estimator, Inputs, Outputs};

@@ -18,6 +18,7 @@ use crate::estimation::model::{
     Eval, Inputs, Leaks, Nuisance, Plant, Step, NX, P3, P4, P_REF, VP, VV, V_REF, XP, XV, X_REF,
 };
 use crate::hypothesis::Hypothesis;
+use crate::leak::Leak;
 use crate::physics::valve::SpoolStep;
 use crate::real::Real;
 use nalgebra::{SMatrix, SVector};
@@ -37,7 +38,7 @@ pub const MAX_STATES: usize = NB + 2;
 
 /// State index of a hypothesis' internal leak coefficient, if it has one.
 pub const fn internal_index(h: Hypothesis) -> Option<usize> {
-    if h.has_internal() {
+    if h.leaks().contains(Leak::Internal) {
         Some(NB)
     } else {
         None
@@ -55,7 +56,7 @@ pub const fn external_index(h: Hypothesis) -> Option<usize> {
 
 /// Number of filter states of a hypothesis: plant, valve nuisance, leaks.
 pub const fn state_count(h: Hypothesis) -> usize {
-    NB + h.has_internal() as usize + h.has_external() as usize
+    NB + h.leaks().len() as usize
 }
 const MEASURED: [usize; NZ] = [XP, P3, P4];
 

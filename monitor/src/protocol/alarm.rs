@@ -14,7 +14,8 @@
 use super::bytes::{get_u32, put_u32};
 use super::signal::SignalList;
 use super::{FieldError, Signals};
-use crate::device::alarm::{AlarmLogic, AlarmState, LeakKind};
+use crate::device::alarm::{AlarmOutput, AlarmState};
+use crate::leak::LeakSet;
 
 /// The alarm frame.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -23,7 +24,7 @@ pub struct AlarmFrame {
     /// The state shown.
     pub state: AlarmState,
     /// Latched leaks.
-    pub latched: LeakKind,
+    pub latched: LeakSet,
     /// Relay commanded energised.
     pub relay_energised: bool,
     /// Faulted input channels, `Channel::bit` mask.
@@ -35,30 +36,32 @@ pub struct AlarmFrame {
 }
 
 impl AlarmFrame {
-    /// This frame as the supervisor reports a stalled estimator at
-    /// `changed_at_ms` (the estimator's own alarm logic is the one that
-    /// stopped): state `EstimatorStalled`, relay off, latch and faults as
-    /// last reported.
-    pub fn stalled(self, changed_at_ms: u32) -> Self {
-        let state = AlarmState::EstimatorStalled;
-        Self {
-            state,
-            relay_energised: state.relay_energised(),
-            changed_at_ms,
-            ..self
-        }
-    }
-
-    /// The frame for the alarm logic's current output.
-    pub fn from_logic(a: &AlarmLogic) -> Self {
-        let out = a.output();
+    /// The frame for the alarm output `out`, last changed at
+    /// `changed_at_ms`.
+    pub const fn new(out: &AlarmOutput, changed_at_ms: u32) -> Self {
         Self {
             state: out.state,
             latched: out.latched,
             relay_energised: out.relay_energised(),
             faulted_channels: out.faulted_channels,
-            changed_at_ms: a.changed_at_ms(),
+            changed_at_ms,
         }
+    }
+
+    /// The output this frame shows.
+    pub const fn output(&self) -> AlarmOutput {
+        AlarmOutput {
+            state: self.state,
+            latched: self.latched,
+            faulted_channels: self.faulted_channels,
+        }
+    }
+
+    /// This frame as the supervisor reports a stalled estimator at
+    /// `changed_at_ms`, the estimator being the one that stopped: its
+    /// output [once stalled](AlarmOutput::stalled).
+    pub const fn stalled(&self, changed_at_ms: u32) -> Self {
+        Self::new(&self.output().stalled(), changed_at_ms)
     }
 
     pub(crate) fn write(&self, d: &mut [u8; 8]) {
@@ -77,7 +80,7 @@ impl AlarmFrame {
         Ok(Self {
             state,
             // Two bits: every value is a kind.
-            latched: LeakKind::from_code(d[2] & 0x03).unwrap_or_default(),
+            latched: LeakSet::of(d[2] & 0x01 != 0, d[2] & 0x02 != 0),
             relay_energised: d[2] & 0x04 != 0,
             faulted_channels: d[3],
             changed_at_ms: get_u32(d, 4),

@@ -2,8 +2,9 @@
 //! counters are checked, the monitor's floats are quantised as documented.
 
 use super::*;
-use crate::device::alarm::{AlarmState, LeakKind};
+use crate::device::alarm::AlarmState;
 use crate::hypothesis::Hypothesis;
+use crate::leak::LeakSet;
 use crate::status::{health, Verdict};
 use crate::testutil;
 
@@ -12,7 +13,7 @@ pub(crate) fn one_of_each() -> [Message; MessageKind::COUNT] {
     [
         Message::Alarm(AlarmFrame {
             state: AlarmState::Leak,
-            latched: LeakKind::Both,
+            latched: LeakSet::BOTH,
             relay_energised: false,
             faulted_channels: 0b0100_0101,
             changed_at_ms: 4_000_000_123,
@@ -87,7 +88,7 @@ fn not_available_and_extreme_values_round_trip() {
         }),
         Message::Alarm(AlarmFrame {
             state: AlarmState::EstimatorStalled,
-            latched: LeakKind::None,
+            latched: LeakSet::NONE,
             relay_energised: true,
             faulted_channels: 0xFF,
             changed_at_ms: u32::MAX,
@@ -112,7 +113,7 @@ fn every_enumerated_value_round_trips() {
     let mut enc = Encoder::new();
     let mut dec = Decoder::new();
     for state in AlarmState::ALL {
-        for latched in LeakKind::ALL {
+        for latched in LeakSet::ALL {
             let msg = Message::Alarm(AlarmFrame {
                 state,
                 latched,

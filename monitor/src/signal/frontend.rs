@@ -192,7 +192,7 @@ impl Frontend {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::{Monitor, Params, Verdict};
 
@@ -222,7 +222,7 @@ mod tests {
         units_per_volt: 0.1,
     };
 
-    fn config(temp: Input) -> FrontendConfig {
+    pub(crate) fn config(temp: Input) -> FrontendConfig {
         FrontendConfig {
             adc: ADC,
             inputs: [

@@ -33,9 +33,9 @@ use firmware::board::BootInfo;
 use firmware::board_map::{FRONTEND, SCANS_PER_SAMPLE};
 use golden::params::golden_params;
 use heapless::Vec;
+use monitor::device::Estimator;
 use monitor::protocol::auth::{acknowledge_frame, Challenger};
 use monitor::protocol::{CanFrame, ResetCause};
-use monitor::Monitor;
 use qemu_tests::counter::{self, Counter};
 use qemu_tests::{exit, println};
 
@@ -100,17 +100,8 @@ unsafe fn DefaultHandler(irqn: i16) {
 }
 
 #[embassy_executor::task]
-async fn estimator(source: ReplayAdc, monitor: &'static mut Monitor<f32>, boot: BootInfo) {
-    app::estimator::run(
-        source,
-        &RELAY,
-        InstructionCounter,
-        monitor,
-        FRONTEND,
-        boot,
-        &SHARED,
-    )
-    .await
+async fn estimator(source: ReplayAdc, pipeline: &'static mut Estimator<f32>, boot: BootInfo) {
+    app::estimator::run(source, &RELAY, InstructionCounter, pipeline, boot, &SHARED).await
 }
 
 #[embassy_executor::task]
@@ -219,8 +210,8 @@ pub fn run(case: &'static EmuCase) -> ! {
         reset_cause: RESET_CAUSE,
     };
     let params = golden_params(case.sample_period_s, case.warm_up_s);
-    let monitor = match Monitor::new(&params) {
-        Ok(m) => cortex_m::singleton!(: Monitor<f32> = m).expect("one monitor"),
+    let pipeline = match app::estimator::pipeline::<InstructionCounter>(&params, FRONTEND) {
+        Ok(e) => cortex_m::singleton!(: Estimator<f32> = e).expect("one estimator"),
         Err(e) => panic!("invalid golden parameters: {}", e.field),
     };
     let source = ReplayAdc::start(case);
@@ -239,7 +230,7 @@ pub fn run(case: &'static EmuCase) -> ! {
         core.NVIC.set_priority(Irq::Tasks, TASKS_PRIORITY);
     }
     let high = EXECUTOR_HIGH.start(Irq::Estimator);
-    high.spawn(estimator(source, monitor, boot).expect("estimator task"));
+    high.spawn(estimator(source, pipeline, boot).expect("estimator task"));
     let low = EXECUTOR_LOW.start(Irq::Tasks);
     low.spawn(supervisor().expect("supervisor task"));
     low.spawn(can_tx().expect("CAN transmit task"));

@@ -7,8 +7,8 @@ use embassy_time::{Duration, Instant};
 use firmware::app::shared::Shared;
 use firmware::app::supervisor::CHECK_PERIOD;
 use heapless::Vec;
-use monitor::device::alarm::LeakKind;
 use monitor::Event;
+use monitor::LeakSet;
 
 use super::frames::Frames;
 use super::{Check, Expect, Findings};
@@ -169,8 +169,8 @@ pub fn relay(case: &EmuCase, log: &Log, frames: &Frames, f: &mut Findings) {
 /// the acknowledge) is the golden's final verdict.
 pub fn verdict(case: &EmuCase, frames: &Frames, f: &mut Findings) {
     let end = case.ack_sample.unwrap_or(case.samples);
-    let mut firmware: Vec<(u32, LeakKind), 16> = Vec::new();
-    let mut latched = LeakKind::None;
+    let mut firmware: Vec<(u32, LeakSet), 16> = Vec::new();
+    let mut latched = LeakSet::NONE;
     for (k, a) in frames.alarms().filter(|&(k, _)| k < end) {
         if a.latched != latched {
             latched = a.latched;
@@ -180,13 +180,13 @@ pub fn verdict(case: &EmuCase, frames: &Frames, f: &mut Findings) {
             }
         }
     }
-    let golden: Vec<(u32, LeakKind), 16> = EmuCase::decoded(case.golden_events)
+    let golden: Vec<(u32, LeakSet), 16> = EmuCase::decoded(case.golden_events)
         .filter_map(|(k, e)| match e {
-            Event::AlarmRaised(v) if k < end => Some((k, LeakKind::of_verdict(v))),
+            Event::AlarmRaised(v) if k < end => Some((k, v.leaks())),
             _ => None,
         })
         .collect();
-    let want = LeakKind::of_verdict(case.golden_verdict());
+    let want = case.golden_verdict().leaks();
     let agree = firmware.len() == golden.len()
         && firmware
             .iter()
@@ -247,7 +247,7 @@ pub fn commands(
     let before = frames.alarms().filter(|&(k, _)| k < ack).last();
     let at = frames.alarms().find(|&(k, _)| k == ack);
     match (before, at) {
-        (Some((_, b)), Some((_, a))) if b.latched != LeakKind::None && a.latched == LeakKind::None => {
+        (Some((_, b)), Some((_, a))) if b.latched != LeakSet::NONE && a.latched == LeakSet::NONE => {
             f.note(format_args!(
                 "acknowledge applied at sample {ack}: latched {} -> {}, state {} -> {} ({} commands rejected)",
                 b.latched.name(),

@@ -4,8 +4,9 @@
 
 use embassy_time::Duration;
 use firmware::app::shared::Shared;
-use monitor::device::alarm::{AlarmState, LeakKind};
+use monitor::device::alarm::AlarmState;
 use monitor::protocol::{e2e, CanFrame, Decoder, Encoder, Message, MessageKind};
+use monitor::LeakSet;
 use qemu_tests::println;
 
 use super::{Check, Expect};
@@ -47,13 +48,13 @@ fn wrong_verdict(log: &mut Log, case: &EmuCase) {
     let leak = log
         .frames
         .iter()
-        .position(|s| alarm(s).is_some_and(|a| a.latched != LeakKind::None));
+        .position(|s| alarm(s).is_some_and(|a| a.latched != LeakSet::NONE));
     let i = leak.unwrap_or_else(|| nth(log, MessageKind::Alarm, case.samples as usize / 1000));
     let mut a = alarm(&log.frames[i]).expect("an alarm frame");
     a.latched = match a.latched {
-        LeakKind::Internal => LeakKind::External,
-        LeakKind::None => LeakKind::Internal,
-        _ => LeakKind::Internal,
+        LeakSet::INTERNAL => LeakSet::EXTERNAL,
+        LeakSet::NONE => LeakSet::INTERNAL,
+        _ => LeakSet::INTERNAL,
     };
     a.state = AlarmState::Leak;
     a.relay_energised = false;
