@@ -162,9 +162,23 @@ impl<T: Real> Monitor<T> {
     /// command, a button). Whether it is accepted is the decision layer's
     /// acknowledge policy (`decision::latch`); when it is, the latch is
     /// cleared, and a leak that is still there is raised again after the
-    /// debounce time. Apply it between two [`step`](Self::step)s.
+    /// debounce time. Apply it between two [`step`](Self::step)s: it is
+    /// dated with the last sample's time. An accepted one keeps the
+    /// verdict from `healthy` (and so the relay off) until the monitor
+    /// has concluded healthy for `acknowledge::EVIDENCE_MS`
+    /// (`health::ACK_EVIDENCE` meanwhile).
     pub fn acknowledge(&mut self) -> AckOutcome {
-        self.decision.acknowledge()
+        let t_ms = self.last_t.map_or(0, sample_ms);
+        self.decision.acknowledge(t_ms)
+    }
+
+    /// The acknowledge policy with other times than the documented ones
+    /// (`decision::acknowledge::AckTiming`), for tests and studies (e.g.
+    /// the zero timing, which accepts every acknowledge at once as before
+    /// the policy existed). The firmware never calls this.
+    pub fn with_ack_timing(mut self, timing: crate::acknowledge::AckTiming) -> Self {
+        self.decision.set_ack_timing(timing);
+        self
     }
 
     /// Process one sample.
@@ -320,6 +334,7 @@ impl<T: Real> Monitor<T> {
             self.quiet.weight(),
             !warming && !suspect && flags & health::FILTER_RESET == 0,
             region,
+            sample_ms(sample.t_s),
             &mut events,
         );
         self.status(sample.t_s, checked.faulted, flags, events)
@@ -356,12 +371,11 @@ impl<T: Real> Monitor<T> {
         }
     }
 
-    fn status(&self, t_s: f64, faulted: u8, mut flags: u16, events: Events) -> Status {
+    fn status(&mut self, t_s: f64, faulted: u8, mut flags: u16, events: Events) -> Status {
         if faulted != 0 {
             flags |= health::SENSOR_FAULT;
         }
-        let d = &self.decision;
-        flags |= d.flags();
+        flags |= self.decision.flags();
         // The oil temperature is optional (the filters estimate viscosity
         // themselves): its fault is reported in flags and events but does
         // not take the verdict away. A required channel's fault does.
@@ -371,11 +385,11 @@ impl<T: Real> Monitor<T> {
             | health::TIME_NOT_INCREASING
             | health::FILTER_RESET
             | health::DATA_GAP;
-        if self.bank.is_none() || flags & unsettled != 0 || !d.conclusive() {
+        if self.bank.is_none() || flags & unsettled != 0 || !self.decision.conclusive() {
             flags |= health::INCONCLUSIVE;
         }
-        let latched = d.latched();
-        let verdict = if required_fault {
+        let latched = self.decision.latched();
+        let mut verdict = if required_fault {
             Verdict::SensorFault
         } else if !latched.is_empty() {
             Verdict::of_leaks(latched)
@@ -384,6 +398,19 @@ impl<T: Real> Monitor<T> {
         } else {
             Verdict::Healthy
         };
+        // After an accepted acknowledge, `healthy` (and the relay) waits
+        // for the evidence period of conclusive healthy verdicts.
+        let held = self
+            .decision
+            .ack_evidence(sample_ms(t_s), verdict == Verdict::Healthy);
+        if held {
+            flags |= health::ACK_EVIDENCE;
+            if verdict == Verdict::Healthy {
+                verdict = Verdict::Inconclusive;
+                flags |= health::INCONCLUSIVE;
+            }
+        }
+        let d = &self.decision;
         let estimating = self.bank.is_some() && flags & health::WARMING_UP == 0;
         let (size, sd) = d.leak_flows();
         let detect = d.detection_flows();
@@ -446,6 +473,16 @@ impl<'a, T: Real> FilterState<'a, T> {
             leak_internal: internal_index(f.hypothesis).map(|i| f.ekf.x[i]),
             leak_external: external_index(f.hypothesis).map(|i| f.ekf.x[i]),
         }
+    }
+}
+
+/// A sample time as ms for the acknowledge policy (times before 0 count
+/// as 0; the policy only compares differences).
+fn sample_ms(t_s: f64) -> u64 {
+    if t_s > 0.0 {
+        libm::round(t_s * 1000.0) as u64
+    } else {
+        0
     }
 }
 

@@ -112,6 +112,10 @@ pub mod health {
     /// A reading was rejected as an outlier at this sample (a spike, or a
     /// valve command the motion contradicts): it was not used.
     pub const OUTLIER: u16 = 1 << 10;
+    /// An acknowledge was accepted and its evidence period runs: the
+    /// verdict is `inconclusive` (relay off) instead of `healthy` until the
+    /// monitor has concluded healthy for `acknowledge::EVIDENCE_MS`.
+    pub const ACK_EVIDENCE: u16 = 1 << 11;
 }
 
 /// Something that happened at this sample.

@@ -86,6 +86,9 @@ struct Run {
     alarms: Vec<(u32, AlarmFrame)>,
     /// (sample, event code).
     events: Vec<(u32, u16)>,
+    /// Samples at which an alarm was raised (each renews the firmware's
+    /// acknowledge challenge).
+    raised: Vec<u32>,
 }
 
 fn run(input: &Input<'_>, codes: &[[u16; 7]], frontend: FrontendConfig, ack: Option<u32>) -> Run {
@@ -98,6 +101,7 @@ fn run(input: &Input<'_>, codes: &[[u16; 7]], frontend: FrontendConfig, ack: Opt
         reference: Vec::with_capacity(codes.len() * REFERENCE_RECORD),
         alarms: Vec::new(),
         events: Vec::new(),
+        raised: Vec::new(),
     };
     for (k, sums) in codes.iter().enumerate() {
         let k = k as u32;
@@ -108,6 +112,9 @@ fn run(input: &Input<'_>, codes: &[[u16; 7]], frontend: FrontendConfig, ack: Opt
         let o = estimator.on_block(&block(sums), &inputs);
         for e in &o.status.events {
             out.events.push((k, event_code(e)));
+            if let monitor::Event::AlarmRaised(_) = e {
+                out.raised.push(k);
+            }
         }
         if o.alarm_changed || o.first {
             out.alarms.push((k, o.alarm_frame));
@@ -202,6 +209,8 @@ pub fn case(
     )
     .unwrap();
     writeln!(src, "    ack_sample: {ack:?},").unwrap();
+    let rotations = ack.map_or(0, |a| r.raised.iter().filter(|&&k| k < a).count());
+    writeln!(src, "    ack_rotations: {rotations},").unwrap();
     let list = |v: &[(u32, u16)]| {
         v.iter()
             .map(|(k, c)| format!("({k}, {c:#06x})"))

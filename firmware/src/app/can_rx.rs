@@ -16,7 +16,8 @@
 
 use core::sync::atomic::Ordering;
 
-use embassy_time::{with_timeout, Duration, Instant, Timer};
+use embassy_futures::select::{select3, Either3};
+use embassy_time::{Duration, Instant, Timer};
 use monitor::protocol::auth::KeyKind;
 use monitor::protocol::gate::{AckGate, GateOutcome};
 use monitor::protocol::{ChallengeFrame, Message};
@@ -50,21 +51,27 @@ pub async fn run<R: CanReceive>(mut rx: R, shared: &Shared, seed: u64) -> ! {
             sent = Some(frame);
             refresh_at = Instant::now() + CHALLENGE_PERIOD;
         }
-        // Wake at the next refresh even without traffic; the board's
-        // receive future may be dropped (it is cancel-safe: a frame is
+        // Wake for a frame, for an attempt or alarm the estimator
+        // recorded (publish at once), or for the refresh. The board's
+        // receive future may be dropped: it is cancel-safe (a frame is
         // taken only when it is returned).
-        let Ok(received) = with_timeout(
-            refresh_at.saturating_duration_since(Instant::now()),
+        let received = match select3(
             rx.receive(),
+            shared.ack.changed.wait(),
+            Timer::at(refresh_at),
         )
         .await
-        else {
-            continue;
+        {
+            Either3::First(received) => received,
+            Either3::Second(()) | Either3::Third(()) => continue,
         };
         match received {
             Ok(frame) => {
                 let now_ms = Instant::now().as_millis();
                 let t_ms = shared.sample_clock_ms(now_ms) as u64;
+                // An alarm raised since the loop last looked renews the
+                // challenge before this frame is checked against it.
+                gate.alarms_raised(shared.ack.raised.load(Ordering::Acquire), now_ms);
                 match gate.receive(&frame, now_ms, t_ms) {
                     GateOutcome::Authentic(authentic) => {
                         defmt::info!("CAN: authentic command {}", authentic.command);

@@ -7,6 +7,7 @@
 use core::sync::atomic::Ordering;
 
 use embassy_time::Instant;
+use monitor::acknowledge::AckEvent;
 use monitor::device::estimator::{Estimator, Inputs};
 use monitor::params::{ParamError, Params};
 use monitor::protocol::{HeartbeatFrame, Message};
@@ -72,10 +73,18 @@ pub async fn run<S: SampleSource, R: RelayOutput, C: CycleCounter>(
             shared.log(LogEvent::Overrun { t_ms, lost });
         }
         if let Some(outcome) = out.acknowledged {
-            let was_latched = outcome.cleared_a_leak();
-            shared.log(LogEvent::Acknowledged { t_ms, was_latched });
+            // Accepted, or refused by the acknowledge policy (the CAN
+            // receiver records the attempts it refused itself).
+            shared.ack_attempt(AckEvent {
+                t_ms,
+                outcome: outcome.result(),
+            });
         }
         for &event in out.status.events.iter() {
+            if let monitor::Event::AlarmRaised(_) = event {
+                // The CAN receiver issues a new challenge.
+                shared.alarm_raised();
+            }
             shared.log(LogEvent::Monitor { t_ms, event });
         }
         if out.alarm_changed || out.first {

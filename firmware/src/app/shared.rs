@@ -33,13 +33,6 @@ pub enum LogEvent {
         /// The new output.
         output: AlarmOutput,
     },
-    /// An acknowledge command was applied.
-    Acknowledged {
-        /// Sample time, ms.
-        t_ms: u64,
-        /// Whether it cleared a latched leak.
-        was_latched: bool,
-    },
     /// An acknowledge attempt: accepted, or rejected with its reason
     /// (by the CAN receiver: transport and authentication; by the
     /// estimator: the acknowledge policy).
@@ -75,6 +68,9 @@ pub struct AckShared {
     /// Alarms raised since boot (wrapping): the receiver issues a new
     /// challenge when this changes.
     pub raised: AtomicU32,
+    /// Signalled on every attempt and alarm raised: the receiver
+    /// publishes the challenge frame at once.
+    pub changed: Signal<CriticalSectionRawMutex, ()>,
 }
 
 impl AckShared {
@@ -158,6 +154,7 @@ impl Shared {
                 last: AtomicU8::new(0),
                 attempts: AtomicU8::new(0),
                 raised: AtomicU32::new(0),
+                changed: Signal::new(),
             },
         }
     }
@@ -166,7 +163,14 @@ impl Shared {
     pub fn ack_attempt(&self, e: AckEvent) {
         self.ack.last.store(e.outcome.code(), Ordering::Relaxed);
         self.ack.attempts.fetch_add(1, Ordering::Relaxed);
+        self.ack.changed.signal(());
         self.log(LogEvent::AckAttempt(e));
+    }
+
+    /// An alarm was raised: the receiver renews the challenge.
+    pub fn alarm_raised(&self) {
+        self.ack.raised.fetch_add(1, Ordering::Release);
+        self.ack.changed.signal(());
     }
 
     /// Queue a message for the CAN transmitter (never waits; replaces a

@@ -36,13 +36,6 @@ fn log_event(e: LogEvent) {
                 "off"
             }
         ),
-        LogEvent::Acknowledged { t_ms, was_latched } => {
-            defmt::info!(
-                "{=u64} ms: alarm acknowledged (latched: {})",
-                t_ms,
-                was_latched
-            )
-        }
         LogEvent::AckAttempt(e) => match e.outcome {
             monitor::acknowledge::AckResult::Accepted => {
                 defmt::warn!("{=u64} ms: acknowledge accepted", e.t_ms)

@@ -8,23 +8,26 @@
 //! CAN alarm frame) reads this latch through [`Status`](crate::Status);
 //! nothing else latches.
 //!
-//! **Acknowledge policy.** Whether a request is accepted is decided in
-//! [`Latch::accepts`], and only there. Today every request is; a hold-off
-//! after the alarm, a rate limit or an authenticated source plug in there
-//! (they may need the request's time or origin: extend
-//! [`Latch::acknowledge`]'s arguments and [`AckOutcome::Refused`] is
-//! already handled by every caller).
+//! **Acknowledge policy.** Whether a request is accepted is decided here,
+//! and only here, by [`AckPolicy`](super::acknowledge::AckPolicy) (see
+//! `decision/acknowledge.rs` and `docs/acknowledge.md`): not within 10 s
+//! of the alarm being raised, at most one per 60 s, and after an accepted
+//! one the relay stays off until 30 s of conclusive healthy verdicts
+//! ([`Latch::relay_permitted`]). Times are the monitor's sample times, ms.
+//! Whether the request came from an authentic source is checked before
+//! (`protocol::gate`).
 
+use super::acknowledge::{AckPolicy, AckRejected, AckResult, AckTiming};
 use crate::leak::LeakSet;
 
 /// What became of an acknowledge request.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum AckOutcome {
-    /// Accepted: these leaks were latched and are cleared (possibly none).
+    /// Accepted: these leaks were latched and are cleared.
     Cleared(LeakSet),
     /// Refused by the acknowledge policy: the latch is unchanged.
-    Refused,
+    Refused(AckRejected),
 }
 
 impl AckOutcome {
@@ -32,19 +35,34 @@ impl AckOutcome {
     pub const fn cleared_a_leak(self) -> bool {
         matches!(self, Self::Cleared(s) if !s.is_empty())
     }
+
+    /// As an acknowledge event's result.
+    pub const fn result(self) -> AckResult {
+        match self {
+            Self::Cleared(_) => AckResult::Accepted,
+            Self::Refused(r) => AckResult::Rejected(r),
+        }
+    }
 }
 
 /// The latch.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Latch {
     latched: LeakSet,
+    policy: AckPolicy,
 }
 
 impl Latch {
-    /// Nothing latched.
+    /// Nothing latched; the documented acknowledge timing.
     pub const fn new() -> Self {
+        Self::with_timing(AckTiming::DEFAULT)
+    }
+
+    /// Nothing latched; acknowledge `timing` (tests and studies).
+    pub const fn with_timing(timing: AckTiming) -> Self {
         Self {
             latched: LeakSet::NONE,
+            policy: AckPolicy::new(timing),
         }
     }
 
@@ -53,30 +71,38 @@ impl Latch {
         self.latched
     }
 
-    /// Leaks `found` by the evidence: latched with those already latched.
-    /// Returns the latched set when it grew (an alarm raised or escalated).
-    pub fn raise(&mut self, found: LeakSet) -> Option<LeakSet> {
+    /// Leaks `found` by the evidence at `t_ms`: latched with those already
+    /// latched. Returns the latched set when it grew (an alarm raised or
+    /// escalated: the acknowledge hold-off starts again).
+    pub fn raise(&mut self, found: LeakSet, t_ms: u64) -> Option<LeakSet> {
         let merged = self.latched.union(found);
         (merged != self.latched).then(|| {
             self.latched = merged;
+            self.policy.raised(t_ms);
             merged
         })
     }
 
-    /// The acknowledge policy: is a request accepted now? Every request
-    /// is, today. This is the place for a hold-off, a rate limit or an
-    /// authentication check.
-    const fn accepts(&self) -> bool {
-        true
+    /// An operator's (authentic) acknowledgement at `t_ms`: if the policy
+    /// accepts it, clear the latch.
+    pub fn acknowledge(&mut self, t_ms: u64) -> AckOutcome {
+        let event = self.policy.request(t_ms, !self.latched.is_empty());
+        match event.outcome {
+            AckResult::Accepted => AckOutcome::Cleared(core::mem::take(&mut self.latched)),
+            AckResult::Rejected(r) => AckOutcome::Refused(r),
+        }
     }
 
-    /// An operator's acknowledgement: if [accepted](Self::accepts), clear
-    /// the latch.
-    pub fn acknowledge(&mut self) -> AckOutcome {
-        if !self.accepts() {
-            return AckOutcome::Refused;
-        }
-        AckOutcome::Cleared(core::mem::take(&mut self.latched))
+    /// The verdict at `t_ms` was a conclusive healthy one (`healthy`) or
+    /// not: counts towards an accepted acknowledge's evidence period.
+    pub fn verdict(&mut self, t_ms: u64, healthy: bool) {
+        self.policy.verdict(t_ms, healthy);
+    }
+
+    /// May the relay be energised as far as acknowledgement goes? False
+    /// from an accepted acknowledge until its evidence period completed.
+    pub const fn relay_permitted(&self) -> bool {
+        self.policy.relay_permitted()
     }
 }
 
@@ -87,26 +113,44 @@ mod tests {
     #[test]
     fn latch_raises_escalates_and_ignores_what_it_holds() {
         let mut l = Latch::new();
-        assert_eq!(l.raise(LeakSet::NONE), None);
-        assert_eq!(l.raise(LeakSet::INTERNAL), Some(LeakSet::INTERNAL));
-        assert_eq!(l.raise(LeakSet::INTERNAL), None, "already latched");
-        assert_eq!(l.raise(LeakSet::EXTERNAL), Some(LeakSet::BOTH), "escalates");
-        assert_eq!(l.raise(LeakSet::INTERNAL), None, "never de-escalates");
+        assert_eq!(l.raise(LeakSet::NONE, 0), None);
+        assert_eq!(l.raise(LeakSet::INTERNAL, 0), Some(LeakSet::INTERNAL));
+        assert_eq!(l.raise(LeakSet::INTERNAL, 0), None, "already latched");
+        assert_eq!(
+            l.raise(LeakSet::EXTERNAL, 0),
+            Some(LeakSet::BOTH),
+            "escalates"
+        );
+        assert_eq!(l.raise(LeakSet::INTERNAL, 0), None, "never de-escalates");
         assert_eq!(l.latched(), LeakSet::BOTH);
     }
 
     #[test]
-    fn latch_is_cleared_only_by_acknowledgement() {
+    fn latch_is_cleared_only_by_an_accepted_acknowledgement() {
+        use crate::decision::acknowledge::{EVIDENCE_MS, HOLD_OFF_MS};
         let mut l = Latch::new();
-        assert_eq!(l.acknowledge(), AckOutcome::Cleared(LeakSet::NONE));
-        assert!(!l.acknowledge().cleared_a_leak());
-        l.raise(LeakSet::EXTERNAL);
-        let ack = l.acknowledge();
-        assert_eq!(ack, AckOutcome::Cleared(LeakSet::EXTERNAL));
-        assert!(ack.cleared_a_leak());
-        assert_eq!(l.latched(), LeakSet::NONE);
         assert_eq!(
-            l.raise(LeakSet::EXTERNAL),
+            l.acknowledge(0),
+            AckOutcome::Refused(AckRejected::NothingLatched)
+        );
+        l.raise(LeakSet::EXTERNAL, 1_000);
+        let early = l.acknowledge(1_000 + HOLD_OFF_MS - 1);
+        assert_eq!(early, AckOutcome::Refused(AckRejected::HoldOff));
+        assert!(!early.cleared_a_leak());
+        assert_eq!(l.latched(), LeakSet::EXTERNAL);
+        let ack = l.acknowledge(1_000 + HOLD_OFF_MS);
+        assert_eq!(ack, AckOutcome::Cleared(LeakSet::EXTERNAL));
+        assert!(ack.cleared_a_leak() && ack.result() == AckResult::Accepted);
+        assert_eq!(l.latched(), LeakSet::NONE);
+        // Cleared, but the relay waits for the evidence period.
+        assert!(!l.relay_permitted());
+        let t0 = 1_000 + HOLD_OFF_MS + 1;
+        for t in t0..=t0 + EVIDENCE_MS {
+            l.verdict(t, true);
+        }
+        assert!(l.relay_permitted());
+        assert_eq!(
+            l.raise(LeakSet::EXTERNAL, t0 + EVIDENCE_MS),
             Some(LeakSet::EXTERNAL),
             "raised anew"
         );

@@ -230,12 +230,12 @@ impl<T: Real> Decision<T> {
             && !self.mismatch
     }
 
-    /// An operator's acknowledgement: the latch decides whether it is
-    /// accepted ([`Latch::acknowledge`]). When it is, the latched leaks
-    /// are cleared and the CUSUMs start over: a leak that is still there
-    /// is raised again after the debounce time.
-    pub fn acknowledge(&mut self) -> AckOutcome {
-        let outcome = self.latch.acknowledge();
+    /// An operator's acknowledgement at `t_ms` (sample time): the latch
+    /// decides whether it is accepted ([`Latch::acknowledge`]). When it
+    /// is, the latched leaks are cleared and the CUSUMs start over: a leak
+    /// that is still there is raised again after the debounce time.
+    pub fn acknowledge(&mut self, t_ms: u64) -> AckOutcome {
+        let outcome = self.latch.acknowledge(t_ms);
         if let AckOutcome::Cleared(_) = outcome {
             self.persist = PerLeak::splat(T::ZERO);
             self.raised = PerLeak::splat(false);
@@ -243,12 +243,28 @@ impl<T: Real> Decision<T> {
         outcome
     }
 
-    /// Take one sample's filter outputs (`None`: that filter was reset).
+    /// Use other acknowledge times (see `Monitor::with_ack_timing`).
+    pub fn set_ack_timing(&mut self, timing: crate::acknowledge::AckTiming) {
+        self.latch = Latch::with_timing(timing);
+    }
+
+    /// The verdict at `t_ms` was a conclusive healthy one or not (for an
+    /// accepted acknowledge's evidence period). Returns whether the relay
+    /// is held off by that period ([`Latch::relay_permitted`]).
+    pub fn ack_evidence(&mut self, t_ms: u64, healthy: bool) -> bool {
+        self.latch.verdict(t_ms, healthy);
+        !self.latch.relay_permitted()
+    }
+
+    /// Take one sample's filter outputs (`None`: that filter was reset)
+    /// at sample time `t_ms`.
     /// `valid`: the sample counts as evidence. `region`: the operating
     /// region (0 retracting, 1 holding, 2 extending) for the baseline.
     /// Returns `health::EVIDENCE_PAUSED` when it did not count (or counted
     /// for little), else 0; the decision's own flags are
     /// [`flags`](Self::flags).
+    // One sample's worth of inputs, each a different kind of fact.
+    #[allow(clippy::too_many_arguments)]
     pub fn update(
         &mut self,
         out: &[Option<FilterOutput<T>>; 4],
@@ -256,6 +272,7 @@ impl<T: Real> Decision<T> {
         weight: T,
         valid: bool,
         region: usize,
+        t_ms: u64,
         events: &mut Events,
     ) -> u16 {
         if out.iter().any(Option::is_none) {
@@ -323,7 +340,7 @@ impl<T: Real> Decision<T> {
             }
         }
         if new_leak {
-            if let Some(latched) = self.latch.raise(self.raised.set()) {
+            if let Some(latched) = self.latch.raise(self.raised.set(), t_ms) {
                 let _ = events.push(Event::AlarmRaised(Verdict::of_leaks(latched)));
             }
         }

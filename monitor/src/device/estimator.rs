@@ -278,7 +278,13 @@ mod tests {
             ..Inputs::default()
         };
         let out = e.on_block(&[0; 28], &ack);
-        assert_eq!(out.acknowledged, Some(AckOutcome::Cleared(LeakSet::NONE)));
+        // Nothing latched: the acknowledge policy refuses it, and says so.
+        assert_eq!(
+            out.acknowledged,
+            Some(AckOutcome::Refused(
+                crate::acknowledge::AckRejected::NothingLatched
+            ))
+        );
         let overrun = Inputs {
             overrun_at_us: Some(10_000),
             ..Inputs::default()

@@ -37,6 +37,10 @@ pub struct EmuCase {
     /// The sample at which the acknowledge command is to be applied
     /// (`None`: no command is sent).
     pub ack_sample: Option<u32>,
+    /// Alarms raised before `ack_sample`: the firmware's acknowledge
+    /// challenge was renewed this many times when the acknowledge answers
+    /// it (the controller the test plays computes it the same way).
+    pub ack_rotations: u32,
     /// The monitor's events on the host for these codes: (sample, code).
     pub events: &'static [(u32, u16)],
     /// The golden's expected events (host, unquantised readings).

@@ -148,9 +148,11 @@ async fn checker(case: &'static EmuCase, t0: Instant, expect: Expect) {
 /// 100 samples before, the acknowledge itself half a sample before (the
 /// receiver task signals it while the estimator waits for the next
 /// block), and a replay of it 50 samples after. Only the second may act.
-/// The acknowledge answers the first challenge of the boot, as a
-/// controller holding the firmware's key computes it (no alarm raised
-/// before it rotates the challenge yet).
+/// The acknowledge answers the challenge current at that time, as a
+/// controller holding the firmware's key computes it: the boot's first,
+/// renewed once per alarm raised before (`EmuCase::ack_rotations`). It
+/// arrives 200 ms after the last alarm change, inside the acknowledge
+/// hold-off: the policy refuses it, the replay is stale.
 fn commands(case: &EmuCase, t0: Instant) -> (Vec<(Instant, CanFrame), 3>, u32) {
     let mut script = Vec::new();
     let Some(ack) = case.ack_sample else {
@@ -159,8 +161,11 @@ fn commands(case: &EmuCase, t0: Instant) -> (Vec<(Instant, CanFrame), 3>, u32) {
     let period = Duration::from_micros(u64::from(case.sample_period_us));
     let at = |k: u32| t0 + period * k + period / 2;
     let key = firmware::ack_key::ACK_KEY;
-    let challenge = Challenger::new(&key, CHALLENGE_SEED, 0).current();
-    let frame = acknowledge_frame(&key, challenge, 0);
+    let mut challenger = Challenger::new(&key, CHALLENGE_SEED, 0);
+    for _ in 0..case.ack_rotations {
+        challenger.rotate(0);
+    }
+    let frame = acknowledge_frame(&key, challenger.current(), 0);
     let mut data = [0u8; 8];
     data.copy_from_slice(frame.data());
     data[2] ^= 0x01;

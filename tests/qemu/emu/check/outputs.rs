@@ -219,9 +219,13 @@ pub fn verdict(case: &EmuCase, frames: &Frames, f: &mut Findings) {
     }
 }
 
-/// The corrupted and the replayed command are rejected and change
-/// nothing; the valid acknowledge clears the latched leak at the next
-/// sample.
+/// The corrupted and the replayed command are rejected by the CAN
+/// receiver; the authentic acknowledge reaches the estimator, whose
+/// acknowledge policy refuses it (it comes within the hold-off after the
+/// alarm) and changes nothing. Every attempt shows in `LM_Challenge`:
+/// (attempts, last result) runs (1, malformed), (2, hold_off),
+/// (3, stale_challenge), and the challenge changes with each alarm raised
+/// and with the authentic frame (its answer is used up).
 pub fn commands(
     case: &EmuCase,
     frames: &Frames,
@@ -230,6 +234,7 @@ pub fn commands(
     f: &mut Findings,
 ) {
     use core::sync::atomic::Ordering::Relaxed;
+    use monitor::acknowledge::{AckRejected, AckResult};
     let rejected = shared.can.rejected.load(Relaxed);
     let bus_errors = shared.can.bus_errors.load(Relaxed);
     if rejected != expect.rejected_commands || bus_errors != 0 {
@@ -241,26 +246,58 @@ pub fn commands(
             ),
         );
     }
+    // Every challenge frame: distinct (attempts, result) and challenges.
+    let mut results: Vec<(u8, Option<AckResult>), 8> = Vec::new();
+    let mut challenges: Vec<u32, 16> = Vec::new();
+    for d in frames.list.iter() {
+        if let monitor::protocol::Message::Challenge(c) = d.msg {
+            if results.last() != Some(&(c.ack_attempts, c.last_ack)) {
+                let _ = results.push((c.ack_attempts, c.last_ack));
+            }
+            if challenges.last() != Some(&c.challenge) {
+                let _ = challenges.push(c.challenge);
+            }
+        }
+    }
     let Some(ack) = case.ack_sample else {
+        if results.as_slice() != [(0, None)] || challenges.is_empty() {
+            f.fail(
+                Check::Commands,
+                format_args!("no command sent, yet challenge frames show {results:?}, challenges {challenges:?}"),
+            );
+        }
         return;
     };
+    let want = [
+        (0, None),
+        (1, Some(AckResult::Rejected(AckRejected::Malformed))),
+        (2, Some(AckResult::Rejected(AckRejected::HoldOff))),
+        (3, Some(AckResult::Rejected(AckRejected::StaleChallenge))),
+    ];
+    // The boot's challenge, one per alarm raised, one after the authentic
+    // frame (alarms raised after it add more).
+    let min_challenges = 2 + case.ack_rotations as usize;
     let before = frames.alarms().filter(|&(k, _)| k < ack).last();
-    let at = frames.alarms().find(|&(k, _)| k == ack);
-    match (before, at) {
-        (Some((_, b)), Some((_, a))) if b.latched != LeakSet::NONE && a.latched == LeakSet::NONE => {
-            f.note(format_args!(
-                "acknowledge applied at sample {ack}: latched {} -> {}, state {} -> {} ({} commands rejected)",
-                b.latched.name(),
-                a.latched.name(),
-                b.state.name(),
-                a.state.name(),
-                rejected
-            ))
-        }
-        other => f.fail(
+    let after = frames.alarms().filter(|&(k, _)| k <= ack + 50).last();
+    let unchanged = matches!((before, after), (Some((_, b)), Some((_, a))) if b.latched == a.latched && b.latched != LeakSet::NONE && !a.relay_energised);
+    if results.as_slice() == want && challenges.len() >= min_challenges && unchanged {
+        f.note(format_args!(
+            "acknowledge at sample {ack} (inside the hold-off): refused, latch and relay unchanged; challenge frames: {:?}; {} challenges ({} alarms raised before it); {rejected} commands rejected by the receiver",
+            results.as_slice(),
+            challenges.len(),
+            case.ack_rotations
+        ));
+    } else {
+        f.fail(
             Check::Commands,
-            format_args!("acknowledge at sample {ack}: alarm frames before/at it {:?}", other),
-        ),
+            format_args!(
+                "acknowledge at sample {ack}: challenge frames {:?} (want {want:?}), {} challenges (want at least {min_challenges}), alarm frames before/after {:?}/{:?}",
+                results.as_slice(),
+                challenges.len(),
+                before,
+                after
+            ),
+        );
     }
 }
 
