@@ -5,6 +5,7 @@
 // `!(x > 0.0)` is deliberate: true for NaN, which must be rejected.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+pub mod ack;
 pub mod calibrate;
 pub mod decode;
 pub mod eval;
