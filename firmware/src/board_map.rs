@@ -12,6 +12,7 @@
 //! | valve command u_valve | PC1 | IN11 | ±10 V via 100 kΩ / 30.1 kΩ to 3.3 V / 43.2 kΩ to GND |
 //! | oil temperature temp_oil (optional) | PC2 | IN12 | 4–20 mA, −20…130 °C, 120 Ω shunt |
 //! | fail-safe relay driver | PB12 | | high = energised = healthy; 100 kΩ pull-down on the driver input |
+//! | relay read-back | PB13 | | the relay's auxiliary NO contact to GND, 10 kΩ pull-up to 3.3 V: low = energised |
 //! | status LED | PC12 | | high = on (Olimex STM32-H405 STAT LED) |
 //! | CAN1 RX / TX | PB8 / PB9 | | 3.3 V transceiver (e.g. TJA1051T/3, SN65HVD230), 500 kbit/s |
 //! | HSE | PH0 / PH1 | | 8 MHz crystal → 168 MHz |
@@ -30,7 +31,7 @@
 #[cfg(feature = "stm32")]
 use embassy_stm32::adc::{AdcChannel, AnyAdcChannel, SampleTime};
 #[cfg(feature = "stm32")]
-use embassy_stm32::peripherals::{ADC1, CAN1, DMA2_CH0, IWDG, PB12, PB8, PB9, PC12, TIM3};
+use embassy_stm32::peripherals::{ADC1, CAN1, DMA2_CH0, IWDG, PB12, PB13, PB8, PB9, PC12, TIM3};
 #[cfg(feature = "stm32")]
 use embassy_stm32::{Peri, Peripherals};
 use monitor::signal::current_loop::{AdcSpec, CurrentLoop, OffsetDivider};
@@ -115,6 +116,8 @@ pub struct Board {
     pub inputs: [AnyAdcChannel<'static, ADC1>; CHANNELS],
     /// Relay driver.
     pub relay: Peri<'static, PB12>,
+    /// Relay read-back (auxiliary contact).
+    pub relay_readback: Peri<'static, PB13>,
     /// Status LED.
     pub led: Peri<'static, PC12>,
     /// CAN1.
@@ -144,6 +147,7 @@ pub fn split(p: Peripherals) -> Board {
             p.PC2.degrade_adc(),
         ],
         relay: p.PB12,
+        relay_readback: p.PB13,
         led: p.PC12,
         can: p.CAN1,
         can_rx: p.PB8,

@@ -20,10 +20,13 @@ use firmware::app;
 use firmware::app::shared::Shared;
 use firmware::board::BootInfo;
 use firmware::board_map::{self, Board, FRONTEND};
+use monitor::device::diagnostics::brownout;
+use monitor::device::diagnostics::{DeviceFault, DeviceFaults};
 use monitor::device::Estimator;
 use static_cell::StaticCell;
 use stm32::adc::AdcSampler;
 use stm32::can::{Receiver, Transmitter};
+use stm32::diagnostics::ImageCheck;
 use stm32::relay::Relay;
 use stm32::system::{Dwt, Iwdg, Led};
 use {defmt_rtt as _, panic_probe as _};
@@ -64,8 +67,8 @@ async fn estimator(
 }
 
 #[embassy_executor::task]
-async fn supervisor(watchdog: Iwdg, relay: &'static Relay, led: Led) {
-    app::supervisor::run(watchdog, relay, led, &SHARED).await
+async fn supervisor(watchdog: Iwdg, relay: &'static Relay, led: Led, image: ImageCheck) {
+    app::supervisor::run(watchdog, relay, led, image, &SHARED).await
 }
 
 #[embassy_executor::task]
@@ -116,6 +119,7 @@ fn start(spawner: Spawner) {
         adc_trigger,
         inputs,
         relay,
+        relay_readback,
         led,
         can,
         can_rx,
@@ -123,14 +127,25 @@ fn start(spawner: Spawner) {
         iwdg,
     } = board_map::split(p);
     // First of all: the relay output, de-energised.
-    let relay: &'static Relay = RELAY.init(Relay::new(relay));
+    let relay: &'static Relay = RELAY.init(Relay::new(relay, relay_readback));
     defmt::info!(
         "leak monitor {} on STM32F405, last reset: {}",
         env!("CARGO_PKG_VERSION"),
         boot.reset_cause
     );
+    let mut device_faults = DeviceFaults::NONE;
     let bor = stm32::system::ensure_brownout_level();
     defmt::info!("brown-out reset level: {}", bor);
+    if bor < brownout::REQUIRED {
+        device_faults.raise(DeviceFault::BrownOut);
+    }
+    let image = stm32::diagnostics::start_up(&mut device_faults);
+    for f in DeviceFault::ALL {
+        if device_faults.contains(f) {
+            // The estimator shows it from its first block: relay off.
+            SHARED.raise_device_fault(f);
+        }
+    }
     defmt::info!(
         "installation parameters: {}",
         installation::INSTALLATION_SOURCE
@@ -149,6 +164,6 @@ fn start(spawner: Spawner) {
     let high = EXECUTOR_HIGH.start(interrupt::UART4);
     high.spawn(unwrap!(estimator(source, relay, cycles, pipeline, boot)));
 
-    spawner.spawn(unwrap!(supervisor(watchdog, relay, Led::new(led))));
+    spawner.spawn(unwrap!(supervisor(watchdog, relay, Led::new(led), image)));
     spawner.spawn(unwrap!(can_start(spawner, can, can_rx, can_tx)));
 }

@@ -3,5 +3,6 @@
 pub mod adc;
 pub mod can;
 pub mod clocks;
+pub mod diagnostics;
 pub mod relay;
 pub mod system;

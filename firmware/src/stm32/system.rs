@@ -57,7 +57,9 @@ pub fn ensure_brownout_level() -> BorLevel {
     // RM0090 §3.6.2: unlock the option bytes, write, start, wait, lock.
     pac::FLASH.optkeyr().write_value(0x0819_2A3B);
     pac::FLASH.optkeyr().write_value(0x4C5D_6E7F);
-    pac::FLASH.optcr().write_value(pac::flash::regs::Optcr(wanted));
+    pac::FLASH
+        .optcr()
+        .write_value(pac::flash::regs::Optcr(wanted));
     pac::FLASH.optcr().modify(|w| w.set_optstrt(true));
     while pac::FLASH.sr().read().bsy() {}
     pac::FLASH.optcr().modify(|w| w.set_optlock(true));
