@@ -23,4 +23,6 @@
 
 pub mod app;
 pub mod board;
-pub mod board_map;
+/// The selected board's map (the `boards` crate): pins, analogue front
+/// end, sampling.
+pub use boards::selected as board_map;

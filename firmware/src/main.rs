@@ -4,7 +4,7 @@
 //! priority than everything else the application does, so CAN, logging
 //! and the supervisor can never delay it; CAN, the supervisor and the log
 //! run in the thread-mode executor. See `firmware/src/lib.rs` for the
-//! tasks and `src/board_map.rs` for the wiring.
+//! tasks and the `boards` crate (`boards/src/h405.rs`) for the wiring.
 #![no_std]
 #![no_main]
 
@@ -19,7 +19,7 @@ use embassy_stm32::Peri;
 use firmware::app;
 use firmware::app::shared::Shared;
 use firmware::board::BootInfo;
-use firmware::board_map::{self, Board, FRONTEND};
+use firmware::board_map::FRONTEND;
 use monitor::device::diagnostics::brownout;
 use monitor::device::diagnostics::{DeviceFault, DeviceFaults};
 use monitor::device::Estimator;
@@ -27,6 +27,7 @@ use static_cell::StaticCell;
 use stm32::adc::AdcSampler;
 use stm32::can::{Receiver, Transmitter};
 use stm32::diagnostics::ImageCheck;
+use stm32::pins::{self, Board};
 use stm32::relay::Relay;
 use stm32::system::{Dwt, Iwdg, Led};
 use {defmt_rtt as _, panic_probe as _};
@@ -125,7 +126,7 @@ fn start(spawner: Spawner) {
         can_rx,
         can_tx,
         iwdg,
-    } = board_map::split(p);
+    } = pins::split(p);
     // First of all: the relay output, de-energised.
     let relay: &'static Relay = RELAY.init(Relay::new(relay, relay_readback));
     defmt::info!(
