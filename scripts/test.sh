@@ -91,6 +91,22 @@ echo "firmware: flash ${flash} B, static RAM ${ram} B, stack estimate ${stack} B
 # (The application tasks without the STM32 board are built, and run, by
 # the QEMU tests below: they depend on firmware without default features.)
 
+step "the image seal: sealed, checked, and a flipped bit is caught"
+cp "$elf" target/firmware-sealed.elf
+scripts/seal-image.py target/firmware-sealed.elf
+scripts/seal-image.py --check target/firmware-sealed.elf
+python3 - target/firmware-sealed.elf <<'PY'
+import struct, subprocess, sys
+d = bytearray(open(sys.argv[1], 'rb').read())
+phoff, = struct.unpack_from('<I', d, 0x1C)
+first_segment, = struct.unpack_from('<I', d, phoff + 4)
+d[first_segment + 0x400] ^= 0x10  # one bit in the program text
+open('target/firmware-flipped.elf', 'wb').write(d)
+r = subprocess.run(['scripts/seal-image.py', '--check', 'target/firmware-flipped.elf'])
+assert r.returncode == 1, 'a flipped bit was not caught'
+print('a flipped bit in the image: caught')
+PY
+
 step "QEMU: qemu-system-arm (Debian)"
 if ! command -v qemu-system-arm >/dev/null; then
   sudo=""

@@ -10,8 +10,7 @@ use std::path::PathBuf;
 // The firmware's analogue front end, from the one file that defines it
 // (the pin assignment in it needs the `stm32` feature, absent here).
 #[allow(dead_code, unexpected_cfgs)]
-#[path = "../firmware/src/board_map.rs"]
-mod board_map;
+use boards::selected as board_map;
 #[path = "build/emu.rs"]
 mod emu;
 
@@ -23,7 +22,6 @@ fn main() {
     println!("cargo:rerun-if-changed=../memory.x");
     // The firmware (its defmt log) is linked into the emulated-board tests.
     println!("cargo:rustc-link-arg-tests=-Tdefmt.x");
-    println!("cargo:rerun-if-changed=../firmware/src/board_map.rs");
     println!("cargo:rerun-if-changed=build/emu.rs");
 
     let data = here.join("../golden/data");

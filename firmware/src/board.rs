@@ -26,6 +26,20 @@ pub trait SampleSource {
 pub trait RelayOutput: Sync {
     /// Energise (healthy) or de-energise (alarm) the relay.
     fn set_energised(&self, energised: bool);
+
+    /// Is the relay energised, as read back from the relay itself (its
+    /// auxiliary contact), independently of what it was driven to?
+    fn read_back(&self) -> bool;
+
+    /// What the relay was last driven to.
+    fn commanded(&self) -> bool;
+}
+
+/// The board's background self-test (e.g. the program image's checksum,
+/// a chunk at a time), stepped by the supervisor every check period.
+pub trait SelfTest {
+    /// One step; the device fault it found, if any.
+    fn step(&mut self) -> Option<monitor::device::diagnostics::DeviceFault>;
 }
 
 /// A CAN transmit error.

@@ -23,7 +23,9 @@
 
 pub mod app;
 pub mod board;
-pub mod board_map;
+/// The selected board's map (the `boards` crate): pins, analogue front
+/// end, sampling.
+pub use boards::selected as board_map;
 
 /// The acknowledge key, compiled in by `build.rs` from
 /// `LEAK_MONITOR_ACK_KEY` (or the public development key, reported as

@@ -4,7 +4,7 @@
 //! priority than everything else the application does, so CAN, logging
 //! and the supervisor can never delay it; CAN, the supervisor and the log
 //! run in the thread-mode executor. See `firmware/src/lib.rs` for the
-//! tasks and `src/board_map.rs` for the wiring.
+//! tasks and the `boards` crate (`boards/src/h405.rs`) for the wiring.
 #![no_std]
 #![no_main]
 
@@ -19,11 +19,15 @@ use embassy_stm32::Peri;
 use firmware::app;
 use firmware::app::shared::Shared;
 use firmware::board::BootInfo;
-use firmware::board_map::{self, Board, FRONTEND};
+use firmware::board_map::FRONTEND;
+use monitor::device::diagnostics::brownout;
+use monitor::device::diagnostics::{DeviceFault, DeviceFaults};
 use monitor::device::Estimator;
 use static_cell::StaticCell;
 use stm32::adc::AdcSampler;
 use stm32::can::{Receiver, Transmitter};
+use stm32::diagnostics::ImageCheck;
+use stm32::pins::{self, Board};
 use stm32::relay::Relay;
 use stm32::system::{Dwt, Iwdg, Led};
 use {defmt_rtt as _, panic_probe as _};
@@ -64,8 +68,8 @@ async fn estimator(
 }
 
 #[embassy_executor::task]
-async fn supervisor(watchdog: Iwdg, relay: &'static Relay, led: Led) {
-    app::supervisor::run(watchdog, relay, led, &SHARED).await
+async fn supervisor(watchdog: Iwdg, relay: &'static Relay, led: Led, image: ImageCheck) {
+    app::supervisor::run(watchdog, relay, led, image, &SHARED).await
 }
 
 #[embassy_executor::task]
@@ -117,22 +121,34 @@ fn start(spawner: Spawner) {
         adc_trigger,
         inputs,
         relay,
+        relay_readback,
         led,
         can,
         can_rx,
         can_tx,
         iwdg,
         rng,
-    } = board_map::split(p);
+    } = pins::split(p);
     // First of all: the relay output, de-energised.
-    let relay: &'static Relay = RELAY.init(Relay::new(relay));
+    let relay: &'static Relay = RELAY.init(Relay::new(relay, relay_readback));
     defmt::info!(
         "leak monitor {} on STM32F405, last reset: {}",
         env!("CARGO_PKG_VERSION"),
         boot.reset_cause
     );
+    let mut device_faults = DeviceFaults::NONE;
     let bor = stm32::system::ensure_brownout_level();
     defmt::info!("brown-out reset level: {}", bor);
+    if bor < brownout::REQUIRED {
+        device_faults.raise(DeviceFault::BrownOut);
+    }
+    let image = stm32::diagnostics::start_up(&mut device_faults);
+    for f in DeviceFault::ALL {
+        if device_faults.contains(f) {
+            // The estimator shows it from its first block: relay off.
+            SHARED.raise_device_fault(f);
+        }
+    }
     defmt::info!(
         "installation parameters: {}",
         installation::INSTALLATION_SOURCE
@@ -154,6 +170,6 @@ fn start(spawner: Spawner) {
     let high = EXECUTOR_HIGH.start(interrupt::UART4);
     high.spawn(unwrap!(estimator(source, relay, cycles, pipeline, boot)));
 
-    spawner.spawn(unwrap!(supervisor(watchdog, relay, Led::new(led))));
+    spawner.spawn(unwrap!(supervisor(watchdog, relay, Led::new(led), image)));
     spawner.spawn(unwrap!(can_start(spawner, can, can_rx, can_tx, seed)));
 }

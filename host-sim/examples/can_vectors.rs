@@ -48,10 +48,11 @@ fn messages() -> Vec<Message> {
             health: (0x1357u32.wrapping_mul(i as u32 + 1) & 0xFFFF) as u16,
         }));
         v.push(Message::Alarm(AlarmFrame {
-            state: AlarmState::ALL[i as usize % 6],
+            state: AlarmState::ALL[i as usize % AlarmState::ALL.len()],
             latched: LeakSet::ALL[i as usize % 4],
             relay_energised: i % 3 == 0,
             faulted_channels: (i as u8).wrapping_mul(37),
+            device_fault: (i % 9) as u8,
             changed_at_ms: (i as u32).wrapping_mul(0x2468_ACE1),
         }));
         v.push(Message::Detail(DetailFrame {

@@ -43,6 +43,7 @@ fn write_log(dir: &Path) -> std::path::PathBuf {
         latched: LeakSet::INTERNAL,
         relay_energised: false,
         faulted_channels: 0,
+        device_fault: 0,
         changed_at_ms: 12_345,
     });
     log += &line(1_000_000, &enc.encode(&alarm));

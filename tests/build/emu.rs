@@ -34,11 +34,10 @@ use monitor::protocol::{AlarmFrame, Command, Encoder, Message};
 use monitor::signal::frontend::{FrontendConfig, Input as FrontInput};
 use monitor::{Channel, Sample};
 
-/// Scans per 1 ms block (`firmware::board_map::SCANS_PER_SAMPLE`; the
-/// target checks they agree).
-pub const SCANS: u16 = 4;
-/// Sample period, µs (`firmware::app::SAMPLE_PERIOD_US`; checked too).
-pub const SAMPLE_PERIOD_US: u32 = 1000;
+/// Scans per 1 ms block, from the board map.
+pub const SCANS: u16 = boards::selected::SCANS_PER_SAMPLE as u16;
+/// Sample period, µs, from the board map.
+pub const SAMPLE_PERIOD_US: u32 = boards::selected::SAMPLE_PERIOD_US;
 /// Bytes per sample in `NAME.reference.bin`.
 pub const REFERENCE_RECORD: usize = 24;
 /// The acknowledge command is applied this long after the last alarm

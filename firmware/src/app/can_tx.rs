@@ -23,6 +23,7 @@ pub async fn run<T: CanTransmit>(mut tx: T, shared: &Shared) -> ! {
     let mut failing = false;
     loop {
         shared.wait_for_messages().await;
+        shared.pass(super::supervisor::CAN_TX);
         while let Some(msg) = shared.take_next() {
             let frame = encoder.encode(&msg);
             match with_timeout(TX_TIMEOUT, tx.transmit(&frame)).await {

@@ -62,10 +62,12 @@ pub async fn run<S: SampleSource, R: RelayOutput, C: CycleCounter>(
         let inputs = Inputs {
             command: shared.commands.try_take(),
             stalled: shared.stalled.load(Ordering::Acquire),
+            device_faults: shared.device_faults(),
             overrun_at_us: core::mem::take(&mut overran)
                 .then(|| Instant::now().duration_since(t0).as_micros()),
         };
         let out = estimator.on_block(raw, &inputs);
+        shared.pass(super::supervisor::ESTIMATOR);
         let t_ms = out.t_ms;
         relay.set_energised(out.relay_energised());
 

@@ -9,4 +9,4 @@ pub mod shared;
 pub mod supervisor;
 
 /// Sample period, µs (1 kHz).
-pub const SAMPLE_PERIOD_US: u32 = 1000;
+pub const SAMPLE_PERIOD_US: u32 = crate::board_map::SAMPLE_PERIOD_US;

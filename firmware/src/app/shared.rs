@@ -3,7 +3,7 @@
 //! estimator never waits for a low-priority task.
 
 use core::cell::{Cell, RefCell};
-use core::sync::atomic::{AtomicBool, AtomicU32, AtomicU8, Ordering};
+use core::sync::atomic::{AtomicBool, AtomicU16, AtomicU32, AtomicU8, Ordering};
 
 use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::blocking_mutex::Mutex;
@@ -12,6 +12,8 @@ use embassy_sync::signal::Signal;
 use monitor::acknowledge::{AckEvent, AckResult};
 use monitor::device::alarm::AlarmOutput;
 use monitor::device::deadline::LoadReport;
+use monitor::device::diagnostics::flow::Checkpoint;
+use monitor::device::diagnostics::{DeviceFault, DeviceFaults};
 use monitor::protocol::outbox::Outbox;
 use monitor::protocol::{AlarmFrame, Command, Message};
 
@@ -96,6 +98,11 @@ pub struct Shared {
     pub alarm_state: AtomicU8,
     /// Set by the supervisor when the estimator stalled: relay off for good.
     pub stalled: AtomicBool,
+    /// Device faults found by the diagnostics (`DeviceFaults` bits),
+    /// latched until reset.
+    device_faults: AtomicU16,
+    /// Program-flow checkpoints passed since the supervisor last looked.
+    checkpoints: AtomicU16,
     /// Boot time of the first sample, ms (`u32::MAX` until it arrives): the
     /// origin of the sample clock, which dates every alarm frame.
     pub first_sample_ms: AtomicU32,
@@ -123,6 +130,27 @@ impl Shared {
         }
     }
 
+    /// Record a device fault (latched until reset); true if it is new.
+    pub fn raise_device_fault(&self, f: DeviceFault) -> bool {
+        let bit = DeviceFaults::bit(f);
+        self.device_faults.fetch_or(bit, Ordering::AcqRel) & bit == 0
+    }
+
+    /// The device faults recorded so far.
+    pub fn device_faults(&self) -> DeviceFaults {
+        DeviceFaults::from_bits(self.device_faults.load(Ordering::Acquire))
+    }
+
+    /// A task passed its program-flow checkpoint.
+    pub fn pass(&self, c: Checkpoint) {
+        self.checkpoints.fetch_or(1 << c.bit, Ordering::Release);
+    }
+
+    /// The checkpoints passed since the previous call (for the supervisor).
+    pub fn take_checkpoints(&self) -> u16 {
+        self.checkpoints.swap(0, Ordering::AcqRel)
+    }
+
     /// Nothing posted, nothing counted.
     pub const fn new() -> Self {
         Self {
@@ -135,6 +163,8 @@ impl Shared {
             missed: AtomicU32::new(0),
             alarm_state: AtomicU8::new(0),
             stalled: AtomicBool::new(false),
+            device_faults: AtomicU16::new(0),
+            checkpoints: AtomicU16::new(0),
             first_sample_ms: AtomicU32::new(u32::MAX),
             last_alarm: Mutex::new(Cell::new(None)),
             last_load: Mutex::new(Cell::new(LoadReport {

@@ -8,15 +8,32 @@ use core::sync::atomic::Ordering;
 
 use embassy_time::{Duration, Instant, Ticker};
 use monitor::device::alarm::AlarmState;
+use monitor::device::diagnostics::flow::{Checkpoint, Flow, FlowMonitor};
+use monitor::device::diagnostics::relay::{ReadbackConfig, RelayReadback};
+use monitor::device::diagnostics::DeviceFault;
 use monitor::device::estimator::stall;
 use monitor::device::supervisor::{Supervision, Supervisor, SupervisorConfig};
 use monitor::protocol::Message;
 
 use super::shared::{LogEvent, Shared};
-use crate::board::{RelayOutput, StatusLed, Watchdog};
+use crate::board::{RelayOutput, SelfTest, StatusLed, Watchdog};
 
 /// How often the estimator is checked.
 pub const CHECK_PERIOD: Duration = Duration::from_millis(10);
+
+/// Program-flow checkpoint of the estimator, passed every block. Its
+/// deadline is longer than the stall rule's, which reacts first.
+pub const ESTIMATOR: Checkpoint = Checkpoint {
+    bit: 0,
+    deadline_checks: 3,
+};
+
+/// Program-flow checkpoint of the CAN transmitter, passed after every
+/// batch of frames (a status frame is due every 100 ms).
+pub const CAN_TX: Checkpoint = Checkpoint {
+    bit: 1,
+    deadline_checks: 50,
+};
 
 /// Checks per summary log line.
 const SUMMARY_EVERY: u32 = 100;
@@ -50,14 +67,56 @@ fn log_event(e: LogEvent) {
     }
 }
 
+/// The device diagnostics of one check: the board's self-test step, the
+/// relay read-back and the program-flow checkpoints. A fault is latched
+/// in `shared` (the estimator shows it from its next block) and drops the
+/// relay at once. Returns false when a checkpoint was missed.
+fn diagnose<R: RelayOutput, S: SelfTest>(
+    self_test: &mut S,
+    readback: &mut RelayReadback,
+    flow: &mut FlowMonitor<2>,
+    relay: &R,
+    shared: &Shared,
+    started: bool,
+) -> bool {
+    let raise = |f: DeviceFault| {
+        relay.set_energised(false);
+        if shared.raise_device_fault(f) {
+            defmt::error!("device fault: {}: relay off until reset", f.name());
+        }
+    };
+    if let Some(f) = self_test.step() {
+        raise(f);
+    }
+    if readback.check(relay.commanded(), relay.read_back()) {
+        raise(DeviceFault::RelayReadback);
+    }
+    let checkpoints = shared.take_checkpoints();
+    // Before the first sample the supervisor's start-up grace applies;
+    // after a stall the stall is the reaction (its checkpoint stays unmet).
+    if !started || shared.stalled.load(Ordering::Acquire) {
+        return true;
+    }
+    match flow.check(checkpoints) {
+        Flow::Ok => true,
+        Flow::Missed(_) => {
+            raise(DeviceFault::ProgramFlow);
+            false
+        }
+    }
+}
+
 /// Run the supervisor for ever.
-pub async fn run<W: Watchdog, R: RelayOutput, L: StatusLed>(
+pub async fn run<W: Watchdog, R: RelayOutput, L: StatusLed, S: SelfTest>(
     mut watchdog: W,
     relay: &R,
     mut led: L,
+    mut self_test: S,
     shared: &Shared,
 ) -> ! {
     let mut supervisor = Supervisor::new(SupervisorConfig::DEFAULT);
+    let mut readback = RelayReadback::new(ReadbackConfig::DEFAULT);
+    let mut flow = FlowMonitor::new([ESTIMATOR, CAN_TX]);
     let mut ticker = Ticker::every(CHECK_PERIOD);
     let mut checks = 0u32;
     loop {
@@ -65,8 +124,19 @@ pub async fn run<W: Watchdog, R: RelayOutput, L: StatusLed>(
         let now_ms = Instant::now().as_millis();
         let processed = shared.processed.load(Ordering::Acquire);
         let missed = shared.missed.load(Ordering::Acquire);
+        let started = processed != 0 || missed != 0;
+        let flow_kept = diagnose(
+            &mut self_test,
+            &mut readback,
+            &mut flow,
+            relay,
+            shared,
+            started,
+        );
         match supervisor.check(processed, missed) {
-            Supervision::Feed => watchdog.feed(),
+            // A task that missed its checkpoint withholds the watchdog too.
+            Supervision::Feed if flow_kept => watchdog.feed(),
+            Supervision::Feed => {}
             Supervision::Withhold => {}
             Supervision::Stalled => {
                 if !shared.stalled.swap(true, Ordering::AcqRel) {

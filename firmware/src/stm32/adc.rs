@@ -23,7 +23,8 @@ use firmware::board::{Overrun, SampleSource};
 use monitor::signal::frontend::CHANNELS;
 use static_cell::StaticCell;
 
-use firmware::board_map::{ADC_SAMPLE_TIME, BLOCK_LEN, SCAN_RATE_HZ};
+use super::pins::ADC_SAMPLE_TIME;
+use firmware::board_map::{BLOCK_LEN, SCAN_RATE_HZ};
 
 bind_interrupts!(struct Irqs {
     DMA2_STREAM0 => dma::InterruptHandler<peripherals::DMA2_CH0>;

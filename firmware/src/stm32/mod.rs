@@ -3,5 +3,7 @@
 pub mod adc;
 pub mod can;
 pub mod clocks;
+pub mod diagnostics;
+pub mod pins;
 pub mod relay;
 pub mod system;

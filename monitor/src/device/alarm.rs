@@ -16,6 +16,7 @@
 //! sensor faults and filter restarts until acknowledged through
 //! [`Monitor::acknowledge`](crate::Monitor::acknowledge).
 
+use crate::device::diagnostics::DeviceFaults;
 use crate::leak::LeakSet;
 use crate::status::{health, Status, Verdict};
 
@@ -38,17 +39,22 @@ pub enum AlarmState {
     /// claim healthy (time not advancing, filters resetting, model misfit,
     /// too little quasi-steady operation). Relay off, like the warm-up.
     Inconclusive = 5,
+    /// The device itself failed a diagnostic (flash, RAM, ADC reference,
+    /// clock, brown-out level, relay read-back, program flow; the code is
+    /// in the alarm frame's `DeviceFault`). Relay off until reset.
+    DeviceFault = 6,
 }
 
 impl AlarmState {
     /// Every state, in wire-code order.
-    pub const ALL: [AlarmState; 6] = [
+    pub const ALL: [AlarmState; 7] = [
         Self::Starting,
         Self::Healthy,
         Self::Leak,
         Self::SensorFault,
         Self::EstimatorStalled,
         Self::Inconclusive,
+        Self::DeviceFault,
     ];
 
     /// Wire code (CAN alarm frame).
@@ -70,6 +76,7 @@ impl AlarmState {
             Self::SensorFault => "sensor_fault",
             Self::EstimatorStalled => "estimator_stalled",
             Self::Inconclusive => "inconclusive",
+            Self::DeviceFault => "device_fault",
         }
     }
 
@@ -86,7 +93,7 @@ impl AlarmState {
             Self::Healthy => t_ms % 1000 < 50,
             Self::Starting | Self::Inconclusive => t_ms % 1000 < 500,
             Self::Leak => true,
-            Self::SensorFault => t_ms % 200 < 100,
+            Self::SensorFault | Self::DeviceFault => t_ms % 200 < 100,
             Self::EstimatorStalled => false,
         }
     }
@@ -103,6 +110,8 @@ pub struct AlarmOutput {
     pub latched: LeakSet,
     /// Faulted input channels, `Channel::bit` mask.
     pub faulted_channels: u8,
+    /// The device fault shown (`DeviceFault` wire code, 0 = none).
+    pub device_fault: u8,
 }
 
 impl AlarmOutput {
@@ -112,6 +121,7 @@ impl AlarmOutput {
         state: AlarmState::Starting,
         latched: LeakSet::NONE,
         faulted_channels: 0,
+        device_fault: 0,
     };
 
     /// The output for the monitor's `status`, `stalled` if the supervisor
@@ -132,6 +142,7 @@ impl AlarmOutput {
             state,
             latched: status.latched,
             faulted_channels: status.faulted_channels,
+            device_fault: 0,
         };
         if stalled {
             out.stalled()
@@ -148,6 +159,24 @@ impl AlarmOutput {
     pub const fn stalled(self) -> Self {
         Self {
             state: AlarmState::EstimatorStalled,
+            ..self
+        }
+    }
+
+    /// This output when the device has `faults`: state `DeviceFault`
+    /// (above everything but a stall), relay off, the first fault's code
+    /// shown; unchanged without a fault.
+    pub fn with_device_faults(self, faults: DeviceFaults) -> Self {
+        if !faults.any() {
+            return self;
+        }
+        let state = match self.state {
+            AlarmState::EstimatorStalled => AlarmState::EstimatorStalled,
+            _ => AlarmState::DeviceFault,
+        };
+        Self {
+            state,
+            device_fault: faults.code(),
             ..self
         }
     }
@@ -191,6 +220,35 @@ mod tests {
         assert!(!of(&inconclusive).relay_energised());
         assert_eq!(of(&healthy()).state, AlarmState::Healthy);
         assert!(of(&healthy()).relay_energised());
+    }
+
+    #[test]
+    fn a_device_fault_drops_the_relay_names_the_fault_and_yields_only_to_a_stall() {
+        use crate::device::diagnostics::{DeviceFault, DeviceFaults};
+        assert_eq!(
+            of(&healthy()).with_device_faults(DeviceFaults::NONE),
+            of(&healthy())
+        );
+        for fault in DeviceFault::ALL {
+            let mut faults = DeviceFaults::NONE;
+            faults.raise(fault);
+            let leak = status(
+                Verdict::Internal,
+                LeakSet::INTERNAL,
+                health::ALARM_LATCHED,
+                0,
+            );
+            for s in [healthy(), leak] {
+                let out = of(&s).with_device_faults(faults);
+                assert_eq!(out.state, AlarmState::DeviceFault, "{}", fault.name());
+                assert_eq!(out.device_fault, fault.code());
+                assert_eq!(out.latched, s.latched, "the latch still shows");
+                assert!(!out.relay_energised());
+            }
+            let stalled = AlarmOutput::of(&healthy(), true).with_device_faults(faults);
+            assert_eq!(stalled.state, AlarmState::EstimatorStalled);
+            assert!(!stalled.relay_energised());
+        }
     }
 
     #[test]
@@ -240,7 +298,7 @@ mod tests {
         for s in AlarmState::ALL {
             assert_eq!(AlarmState::from_code(s.code()), Some(s));
         }
-        assert_eq!(AlarmState::from_code(6), None);
+        assert_eq!(AlarmState::from_code(7), None);
     }
 
     #[test]

@@ -22,12 +22,13 @@
 use crate::decision::latch::AckOutcome;
 use crate::device::alarm::AlarmOutput;
 use crate::device::deadline::{DeadlineMonitor, LoadReport, SampleClock};
+use crate::device::diagnostics::DeviceFaults;
 use crate::monitor::Monitor;
 use crate::params::{ParamError, Params};
 use crate::protocol::schedule::{Due, FrameScheduler};
 use crate::protocol::{AlarmFrame, Command, DetailFrame, StatusFrame};
 use crate::real::Real;
-use crate::signal::frontend::{average_scans, Frontend, FrontendConfig};
+use crate::signal::frontend::{Frontend, FrontendConfig};
 use crate::status::Status;
 
 /// What the estimator is given with a block, besides the ADC codes.
@@ -37,6 +38,9 @@ pub struct Inputs {
     pub command: Option<Command>,
     /// The supervisor declared the estimator stalled.
     pub stalled: bool,
+    /// The device's own diagnostics found these faults (latched by the
+    /// caller until reset).
+    pub device_faults: DeviceFaults,
     /// ADC data was lost before this block, which was taken this long
     /// after the first block, µs: the sample clock resynchronises.
     pub overrun_at_us: Option<u64>,
@@ -162,16 +166,14 @@ impl<T: Real> Estimator<T> {
         });
         let index = self.clock.next_index();
         let t_ms = self.clock.t_ms(index);
-        let acquired = self
-            .frontend
-            .convert(self.clock.t_s(index), &average_scans(raw));
+        let acquired = self.frontend.convert_scans(self.clock.t_s(index), raw);
         let acknowledged = inputs.command.map(|c| match c {
             Command::AcknowledgeAlarm => self.monitor.acknowledge(),
         });
         let status = self.monitor.step(&acquired.sample);
 
         self.stalled |= inputs.stalled;
-        let alarm = AlarmOutput::of(&status, self.stalled);
+        let alarm = AlarmOutput::of(&status, self.stalled).with_device_faults(inputs.device_faults);
         let alarm_changed = alarm != self.alarm;
         if alarm_changed {
             self.alarm = alarm;
@@ -267,6 +269,26 @@ mod tests {
         assert_eq!(s.frame, None);
         assert_eq!(s.output.state, AlarmState::EstimatorStalled);
         assert!(!s.output.relay_energised());
+    }
+
+    #[test]
+    fn estimator_shows_a_device_fault_from_the_next_block() {
+        use crate::device::diagnostics::{DeviceFault, DeviceFaults};
+        let mut e = estimator();
+        e.on_block(&[0; 28], &Inputs::default());
+        let mut faults = DeviceFaults::NONE;
+        faults.raise(DeviceFault::RelayReadback);
+        let inputs = Inputs {
+            device_faults: faults,
+            ..Inputs::default()
+        };
+        let out = e.on_block(&[0; 28], &inputs);
+        assert_eq!(out.alarm.state, AlarmState::DeviceFault);
+        assert!(out.alarm_changed && out.due.alarm && !out.relay_energised());
+        assert_eq!(
+            out.alarm_frame.device_fault,
+            DeviceFault::RelayReadback.code()
+        );
     }
 
     #[test]

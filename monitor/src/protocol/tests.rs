@@ -16,6 +16,7 @@ pub(crate) fn one_of_each() -> [Message; MessageKind::COUNT] {
             latched: LeakSet::BOTH,
             relay_energised: false,
             faulted_channels: 0b0100_0101,
+            device_fault: 7,
             changed_at_ms: 4_000_000_123,
         }),
         Message::Status(StatusFrame {
@@ -91,6 +92,7 @@ fn not_available_and_extreme_values_round_trip() {
             latched: LeakSet::NONE,
             relay_energised: true,
             faulted_channels: 0xFF,
+            device_fault: 8,
             changed_at_ms: u32::MAX,
         }),
         Message::Heartbeat(HeartbeatFrame {
@@ -119,6 +121,7 @@ fn every_enumerated_value_round_trips() {
                 latched,
                 relay_energised: state.relay_energised(),
                 faulted_channels: 0,
+                device_fault: (state == AlarmState::DeviceFault) as u8 * 3,
                 changed_at_ms: 1,
             });
             assert_eq!(dec.decode(&enc.encode(&msg)).unwrap().message, msg);
@@ -298,11 +301,21 @@ fn foreign_and_malformed_frames_are_rejected() {
         })
     ));
     assert!(matches!(
-        field(0x300, [0, 0x60, 0, 0, 0, 0, 0, 0]),
+        field(0x300, [0, 0x60, 9 << 3, 0, 0, 0, 0, 0]),
+        Err(DecodeError::Field {
+            error: FieldError {
+                field: "DeviceFault",
+                raw: 9
+            },
+            ..
+        })
+    ));
+    assert!(matches!(
+        field(0x300, [0, 0x70, 0, 0, 0, 0, 0, 0]),
         Err(DecodeError::Field {
             error: FieldError {
                 field: "AlarmState",
-                raw: 6
+                raw: 7
             },
             ..
         })
@@ -431,6 +444,7 @@ fn signals_name_every_field_with_its_physical_value() {
             "AlarmState",
             "LatchedLeak",
             "RelayEnergised",
+            "DeviceFault",
             "FaultedChannels",
             "ChangedAt"
         ]

@@ -10,9 +10,10 @@ use core::sync::atomic::{AtomicBool, Ordering};
 use embassy_time::{Duration, Instant, Timer};
 use firmware::board::{
     CanReceive, CanRxError, CanTransmit, CanTxError, CycleCounter, Overrun, RelayOutput,
-    SampleSource, StatusLed, Watchdog,
+    SampleSource, SelfTest, StatusLed, Watchdog,
 };
 use firmware::board_map::{BLOCK_LEN, SCANS_PER_SAMPLE};
+use monitor::device::diagnostics::DeviceFault;
 use monitor::protocol::CanFrame;
 use monitor::signal::frontend::CHANNELS;
 use qemu_tests::counter;
@@ -86,6 +87,21 @@ impl SampleSource for ReplayAdc {
     }
 }
 
+/// The board's background self-test: finds nothing, or, when a test
+/// injects one, a device fault from a given time on.
+pub struct ScriptedSelfTest {
+    /// The fault and when it appears.
+    pub fault: Option<(Instant, DeviceFault)>,
+}
+
+impl SelfTest for ScriptedSelfTest {
+    fn step(&mut self) -> Option<DeviceFault> {
+        self.fault
+            .filter(|(at, _)| Instant::now() >= *at)
+            .map(|(_, f)| f)
+    }
+}
+
 /// The fail-safe relay: records its first write and every change.
 pub struct RecordingRelay {
     energised: AtomicBool,
@@ -113,6 +129,15 @@ impl RelayOutput for RecordingRelay {
                 l.overflow = true;
             }
         });
+    }
+
+    fn read_back(&self) -> bool {
+        // The emulated relay follows its driver.
+        self.energised.load(Ordering::Relaxed)
+    }
+
+    fn commanded(&self) -> bool {
+        self.energised.load(Ordering::Relaxed)
     }
 }
 

@@ -41,10 +41,11 @@ use qemu_tests::{exit, println};
 
 use board::{
     InstructionCounter, RecordingCanTx, RecordingLed, RecordingRelay, RecordingWatchdog, ReplayAdc,
-    ScriptedCanRx,
+    ScriptedCanRx, ScriptedSelfTest,
 };
 use case::EmuCase;
 use check::Expect;
+use monitor::device::diagnostics::DeviceFault;
 
 static SHARED: Shared = Shared::new();
 static RELAY: RecordingRelay = RecordingRelay::new();
@@ -105,8 +106,15 @@ async fn estimator(source: ReplayAdc, pipeline: &'static mut Estimator<f32>, boo
 }
 
 #[embassy_executor::task]
-async fn supervisor() {
-    app::supervisor::run(RecordingWatchdog, &RELAY, RecordingLed::new(), &SHARED).await
+async fn supervisor(self_test: ScriptedSelfTest) {
+    app::supervisor::run(
+        RecordingWatchdog,
+        &RELAY,
+        RecordingLed::new(),
+        self_test,
+        &SHARED,
+    )
+    .await
 }
 
 #[embassy_executor::task]
@@ -117,6 +125,23 @@ async fn can_tx() {
 #[embassy_executor::task]
 async fn can_rx(rx: ScriptedCanRx) {
     app::can_rx::run(rx, &SHARED, CHALLENGE_SEED).await
+}
+
+/// Wait for the end of the replay, check the run with an injected device
+/// fault, and end it.
+#[embassy_executor::task]
+async fn fault_checker(case: &'static EmuCase, t0: Instant, fault: DeviceFault, at: Instant) {
+    let period = Duration::from_micros(u64::from(case.sample_period_us));
+    Timer::at(t0 + period * (case.samples - 1) + SETTLE).await;
+    let passed = record::with(|log| check::device_fault::run(log, fault, at));
+    if passed {
+        println!(
+            "firmware on the emulated board, case {} with device fault {}: all checks passed",
+            case.name,
+            fault.name()
+        );
+    }
+    exit(passed)
 }
 
 /// Wait for the end of the replay, check, and end the run.
@@ -197,7 +222,19 @@ fn check_time_base() -> bool {
 }
 
 /// Replay `case` through the firmware's tasks and check what they do.
+#[allow(dead_code)] // each test binary calls one of the two
 pub fn run(case: &'static EmuCase) -> ! {
+    run_with(case, None)
+}
+
+/// Replay `case` with the board's self-test finding `fault` 100 ms after
+/// the relay was first energised, and check the firmware's reaction.
+#[allow(dead_code)]
+pub fn run_with_fault(case: &'static EmuCase, fault: DeviceFault) -> ! {
+    run_with(case, Some(fault))
+}
+
+fn run_with(case: &'static EmuCase, fault: Option<DeviceFault>) -> ! {
     assert!(
         case.sample_period_us == app::SAMPLE_PERIOD_US && case.scans as usize == SCANS_PER_SAMPLE,
         "{}: codes generated for another sample period or scan count",
@@ -237,10 +274,28 @@ pub fn run(case: &'static EmuCase) -> ! {
     let high = EXECUTOR_HIGH.start(Irq::Estimator);
     high.spawn(estimator(source, pipeline, boot).expect("estimator task"));
     let low = EXECUTOR_LOW.start(Irq::Tasks);
-    low.spawn(supervisor().expect("supervisor task"));
+    // The injected fault: 100 ms after the host's reference first
+    // energises the relay (the golden's healthy claim).
+    let inject = fault.map(|f| {
+        let energised = case
+            .alarm_changes()
+            .find(|(_, a)| a.relay_energised)
+            .map(|(k, _)| k)
+            .expect("the case energises the relay");
+        assert!(
+            energised + 150 < case.samples,
+            "too late in the case to inject"
+        );
+        let period = Duration::from_micros(u64::from(case.sample_period_us));
+        (t0 + period * (energised + 100), f)
+    });
+    low.spawn(supervisor(ScriptedSelfTest { fault: inject }).expect("supervisor task"));
     low.spawn(can_tx().expect("CAN transmit task"));
     low.spawn(can_rx(ScriptedCanRx::new(script.as_slice())).expect("CAN receive task"));
-    low.spawn(checker(case, t0, expect).expect("checker task"));
+    match inject {
+        None => low.spawn(checker(case, t0, expect).expect("checker task")),
+        Some((at, f)) => low.spawn(fault_checker(case, t0, f, at).expect("checker task")),
+    }
     loop {
         cortex_m::asm::wfi();
     }

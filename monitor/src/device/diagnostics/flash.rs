@@ -62,29 +62,35 @@ impl FlashScan {
         (self.offset, max_chunk.min(self.len - self.offset))
     }
 
-    /// Feed the chunk at [`Self::next_chunk`]'s offset (`region` is the
-    /// whole region; only the chunk is read).
-    pub fn step(&mut self, region: &[u8], max_chunk: usize) -> ScanStep {
-        let (start, n) = self.next_chunk(max_chunk);
-        let chunk = region.get(start..start + n).unwrap_or(&[]);
+    /// Feed the chunk at [`Self::next_chunk`]'s offset (the caller reads
+    /// it, e.g. from flash with a sealed word patched). An empty chunk
+    /// before the end of the region ends the pass as a mismatch.
+    pub fn feed(&mut self, chunk: &[u8]) -> ScanStep {
         // The crc crate's digest borrows its `Crc`; keep the register
         // between calls instead and resume from it.
         let mut digest = FLASH_CRC.digest_with_initial(self.digest_state_or_init());
         digest.update(chunk);
-        self.offset += n;
+        self.offset += chunk.len().min(self.len - self.offset);
         if self.offset < self.len && !chunk.is_empty() {
             self.digest_state = resume_register(digest.finalize());
             return ScanStep::InProgress;
         }
         let found = digest.finalize();
+        let complete = self.offset == self.len;
         self.offset = 0;
         self.digest_state = 0;
-        if found == self.expected && chunk.len() == n {
+        if complete && found == self.expected {
             self.passes = self.passes.wrapping_add(1);
             ScanStep::PassOk
         } else {
             ScanStep::Mismatch { found }
         }
+    }
+
+    /// Feed the next chunk of `region` (the whole region in memory).
+    pub fn step(&mut self, region: &[u8], max_chunk: usize) -> ScanStep {
+        let (start, n) = self.next_chunk(max_chunk);
+        self.feed(region.get(start..start + n).unwrap_or(&[]))
     }
 
     fn digest_state_or_init(&self) -> u32 {

@@ -126,6 +126,18 @@ impl DeviceFaults {
     pub const fn bits(self) -> u16 {
         self.bits
     }
+
+    /// The bit of one fault in [`Self::bits`].
+    pub const fn bit(f: DeviceFault) -> u16 {
+        1 << f.code()
+    }
+
+    /// Faults from a bit set (unknown bits are ignored).
+    pub const fn from_bits(bits: u16) -> Self {
+        Self {
+            bits: bits & 0b1_1111_1110,
+        }
+    }
 }
 
 #[cfg(test)]

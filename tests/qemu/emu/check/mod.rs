@@ -4,6 +4,7 @@
 //! (`selftest`) can run them again on a deliberately damaged log and
 //! require them to fail.
 
+pub mod device_fault;
 mod frames;
 mod outputs;
 pub mod selftest;

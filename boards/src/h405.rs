@@ -12,6 +12,7 @@
 //! | valve command u_valve | PC1 | IN11 | ±10 V via 100 kΩ / 30.1 kΩ to 3.3 V / 43.2 kΩ to GND |
 //! | oil temperature temp_oil (optional) | PC2 | IN12 | 4–20 mA, −20…130 °C, 120 Ω shunt |
 //! | fail-safe relay driver | PB12 | | high = energised = healthy; 100 kΩ pull-down on the driver input |
+//! | relay read-back | PB13 | | the relay's auxiliary NO contact to GND, 10 kΩ pull-up to 3.3 V: low = energised |
 //! | status LED | PC12 | | high = on (Olimex STM32-H405 STAT LED) |
 //! | CAN1 RX / TX | PB8 / PB9 | | 3.3 V transceiver (e.g. TJA1051T/3, SN65HVD230), 500 kbit/s |
 //! | HSE | PH0 / PH1 | | 8 MHz crystal → 168 MHz |
@@ -23,30 +24,25 @@
 //! fault limits 3.6 / 21 mA are 0.43 / 2.52 V, inside the ADC range, so a
 //! broken or shorted loop is seen as such.
 //!
-//! The analogue part (ranges, shunts, divider, sampling rate) builds
-//! without the HAL, so an emulated board can feed the same front end; the
-//! pin assignment needs the `stm32` feature.
+//! This crate holds no HAL code, so the firmware, the build script of the
+//! on-target tests and the emulated board all use this one map; the
+//! firmware's `stm32::pins` hands out the pins listed here.
 
-#[cfg(feature = "stm32")]
-use embassy_stm32::adc::{AdcChannel, AnyAdcChannel, SampleTime};
-#[cfg(feature = "stm32")]
-use embassy_stm32::peripherals::{ADC1, CAN1, DMA2_CH0, IWDG, PB12, PB8, PB9, PC12, RNG, TIM3};
-#[cfg(feature = "stm32")]
-use embassy_stm32::{Peri, Peripherals};
 use monitor::signal::current_loop::{AdcSpec, CurrentLoop, OffsetDivider};
 use monitor::signal::frontend::{FrontendConfig, Input, CHANNELS};
 use monitor::signal::ne43::DebounceConfig;
 
+/// The monitor's sample period, µs (1 kHz).
+pub const SAMPLE_PERIOD_US: u32 = 1000;
 /// Scans of all channels per 1 ms sample, averaged (oversampling).
 pub const SCANS_PER_SAMPLE: usize = 4;
 /// ADC trigger rate (TIM3 update → TRGO), Hz.
 pub const SCAN_RATE_HZ: u32 = 1000 * SCANS_PER_SAMPLE as u32;
 /// Codes per 1 ms block.
 pub const BLOCK_LEN: usize = SCANS_PER_SAMPLE * CHANNELS;
-/// ADC sample time per channel: 144 ADC clocks at 21 MHz (6.9 µs; a scan
+/// ADC sample time per channel, ADC clocks: 144 at 21 MHz (6.9 µs; a scan
 /// of 7 channels takes 52 µs of the 250 µs between triggers).
-#[cfg(feature = "stm32")]
-pub const ADC_SAMPLE_TIME: SampleTime = SampleTime::CYCLES144;
+pub const ADC_SAMPLE_CYCLES: u16 = 144;
 
 /// Is the optional oil-temperature transmitter fitted? If not, PC2 is
 /// not read and the monitor runs without temperature compensation.
@@ -101,56 +97,3 @@ pub const FRONTEND: FrontendConfig = FrontendConfig {
     ],
     debounce: DebounceConfig::DEFAULT,
 };
-
-/// The board's peripherals, taken out of embassy's `Peripherals`.
-#[cfg(feature = "stm32")]
-pub struct Board {
-    /// ADC1, scanning the inputs.
-    pub adc: Peri<'static, ADC1>,
-    /// DMA2 stream 0 (ADC1 request).
-    pub adc_dma: Peri<'static, DMA2_CH0>,
-    /// TIM3, triggering the scans.
-    pub adc_trigger: Peri<'static, TIM3>,
-    /// The analogue inputs, in `Channel::ALL` order.
-    pub inputs: [AnyAdcChannel<'static, ADC1>; CHANNELS],
-    /// Relay driver.
-    pub relay: Peri<'static, PB12>,
-    /// Status LED.
-    pub led: Peri<'static, PC12>,
-    /// CAN1.
-    pub can: Peri<'static, CAN1>,
-    /// CAN1 RX.
-    pub can_rx: Peri<'static, PB8>,
-    /// CAN1 TX.
-    pub can_tx: Peri<'static, PB9>,
-    /// Independent watchdog.
-    pub iwdg: Peri<'static, IWDG>,
-    /// True random number generator (seeds the acknowledge challenges).
-    pub rng: Peri<'static, RNG>,
-}
-
-/// Assign the pins.
-#[cfg(feature = "stm32")]
-pub fn split(p: Peripherals) -> Board {
-    Board {
-        adc: p.ADC1,
-        adc_dma: p.DMA2_CH0,
-        adc_trigger: p.TIM3,
-        inputs: [
-            p.PA0.degrade_adc(),
-            p.PA1.degrade_adc(),
-            p.PA2.degrade_adc(),
-            p.PA3.degrade_adc(),
-            p.PC0.degrade_adc(),
-            p.PC1.degrade_adc(),
-            p.PC2.degrade_adc(),
-        ],
-        relay: p.PB12,
-        led: p.PC12,
-        can: p.CAN1,
-        can_rx: p.PB8,
-        can_tx: p.PB9,
-        iwdg: p.IWDG,
-        rng: p.RNG,
-    }
-}
