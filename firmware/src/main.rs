@@ -56,30 +56,16 @@ unsafe fn UART4() {
     unsafe { EXECUTOR_HIGH.on_interrupt() }
 }
 
-#[embassy_executor::task]
-async fn estimator(
-    source: AdcSampler,
-    relay: &'static Relay,
-    cycles: Dwt,
-    estimator: &'static mut Estimator<f32>,
-    boot: BootInfo,
-) {
-    app::estimator::run(source, relay, cycles, estimator, boot, &SHARED).await
-}
-
-#[embassy_executor::task]
-async fn supervisor(watchdog: Iwdg, relay: &'static Relay, led: Led, image: ImageCheck) {
-    app::supervisor::run(watchdog, relay, led, image, &SHARED).await
-}
-
-#[embassy_executor::task]
-async fn can_tx(tx: Transmitter) {
-    app::can_tx::run(tx, &SHARED).await
-}
-
-#[embassy_executor::task]
-async fn can_rx(rx: Receiver, seed: u64) {
-    app::can_rx::run(rx, &SHARED, seed).await
+firmware::app_tasks! {
+    shared: SHARED,
+    sample_source: AdcSampler,
+    relay: Relay,
+    cycle_counter: Dwt,
+    watchdog: Iwdg,
+    led: Led,
+    self_test: ImageCheck,
+    can_tx: Transmitter,
+    can_rx: Receiver,
 }
 
 /// Bring CAN up (waits for an idle bus) without holding anything else up.

@@ -100,31 +100,16 @@ unsafe fn DefaultHandler(irqn: i16) {
     }
 }
 
-#[embassy_executor::task]
-async fn estimator(source: ReplayAdc, pipeline: &'static mut Estimator<f32>, boot: BootInfo) {
-    app::estimator::run(source, &RELAY, InstructionCounter, pipeline, boot, &SHARED).await
-}
-
-#[embassy_executor::task]
-async fn supervisor(self_test: ScriptedSelfTest) {
-    app::supervisor::run(
-        RecordingWatchdog,
-        &RELAY,
-        RecordingLed::new(),
-        self_test,
-        &SHARED,
-    )
-    .await
-}
-
-#[embassy_executor::task]
-async fn can_tx() {
-    app::can_tx::run(RecordingCanTx, &SHARED).await
-}
-
-#[embassy_executor::task]
-async fn can_rx(rx: ScriptedCanRx) {
-    app::can_rx::run(rx, &SHARED, CHALLENGE_SEED).await
+firmware::app_tasks! {
+    shared: SHARED,
+    sample_source: ReplayAdc,
+    relay: RecordingRelay,
+    cycle_counter: InstructionCounter,
+    watchdog: RecordingWatchdog,
+    led: RecordingLed,
+    self_test: ScriptedSelfTest,
+    can_tx: RecordingCanTx,
+    can_rx: ScriptedCanRx,
 }
 
 /// Wait for the end of the replay, check the run with an injected device
@@ -272,7 +257,9 @@ fn run_with(case: &'static EmuCase, fault: Option<DeviceFault>) -> ! {
         core.NVIC.set_priority(Irq::Tasks, TASKS_PRIORITY);
     }
     let high = EXECUTOR_HIGH.start(Irq::Estimator);
-    high.spawn(estimator(source, pipeline, boot).expect("estimator task"));
+    high.spawn(
+        estimator(source, &RELAY, InstructionCounter, pipeline, boot).expect("estimator task"),
+    );
     let low = EXECUTOR_LOW.start(Irq::Tasks);
     // The injected fault: 100 ms after the host's reference first
     // energises the relay (the golden's healthy claim).
@@ -289,9 +276,12 @@ fn run_with(case: &'static EmuCase, fault: Option<DeviceFault>) -> ! {
         let period = Duration::from_micros(u64::from(case.sample_period_us));
         (t0 + period * (energised + 100), f)
     });
-    low.spawn(supervisor(ScriptedSelfTest { fault: inject }).expect("supervisor task"));
-    low.spawn(can_tx().expect("CAN transmit task"));
-    low.spawn(can_rx(ScriptedCanRx::new(script.as_slice())).expect("CAN receive task"));
+    let self_test = ScriptedSelfTest { fault: inject };
+    let supervisor = supervisor(RecordingWatchdog, &RELAY, RecordingLed::new(), self_test);
+    low.spawn(supervisor.expect("supervisor task"));
+    low.spawn(can_tx(RecordingCanTx).expect("CAN transmit task"));
+    let can_rx = can_rx(ScriptedCanRx::new(script.as_slice()), CHALLENGE_SEED);
+    low.spawn(can_rx.expect("CAN receive task"));
     match inject {
         None => low.spawn(checker(case, t0, expect).expect("checker task")),
         Some((at, f)) => low.spawn(fault_checker(case, t0, f, at).expect("checker task")),
