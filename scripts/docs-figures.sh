@@ -179,29 +179,7 @@ fig_size() {
     cargo build --quiet -p firmware --release --target thumbv7em-none-eabihf
     {
       # Sum the allocated sections as scripts/test.sh does.
-      python3 - "$elf" <<'PY'
-import struct, sys
-data = open(sys.argv[1], 'rb').read()
-assert data[:4] == b'\x7fELF', 'not an ELF file'
-shoff, = struct.unpack_from('<I', data, 0x20)
-shentsize, shnum, shstrndx = struct.unpack_from('<HHH', data, 0x2e)
-def sec(i):
-    return struct.unpack_from('<IIIIIIIIII', data, shoff + i * shentsize)
-names = sec(shstrndx)[4]
-flash = ram = 0
-for i in range(shnum):
-    name_off, typ, flags, addr, off, size = sec(i)[:6]
-    name = data[names + name_off:data.index(b'\0', names + name_off)].decode()
-    if flags & 2:  # SHF_ALLOC
-        if 0x08000000 <= addr < 0x08100000:
-            flash += size
-        elif 0x20000000 <= addr < 0x20020000:
-            ram += size
-        if name == '.data':
-            flash += size
-print(f'FLASH={flash}')
-print(f'RAM={ram}')
-PY
+      python3 scripts/firmware_size.py --vars "$elf"
       python3 scripts/stack_estimate.py "$elf"
     } > "$out/size.txt"
   fi

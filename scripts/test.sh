@@ -56,29 +56,7 @@ step "firmware builds and links (release, reference parameters)"
 cargo build -p firmware --release --target thumbv7em-none-eabihf
 elf=target/thumbv7em-none-eabihf/release/firmware
 # A firmware built without the link script is a few bytes: fail loudly.
-text=$(python3 - "$elf" <<'PY'
-import struct, sys
-data = open(sys.argv[1], 'rb').read()
-assert data[:4] == b'\x7fELF', 'not an ELF file'
-shoff, = struct.unpack_from('<I', data, 0x20)
-shentsize, shnum, shstrndx = struct.unpack_from('<HHH', data, 0x2e)
-def sec(i):
-    return struct.unpack_from('<IIIIIIIIII', data, shoff + i * shentsize)
-names = sec(shstrndx)[4]
-flash = ram = 0
-for i in range(shnum):
-    name_off, typ, flags, addr, off, size = sec(i)[:6]
-    name = data[names + name_off:data.index(b'\0', names + name_off)].decode()
-    if flags & 2:  # SHF_ALLOC
-        if 0x08000000 <= addr < 0x08100000:
-            flash += size
-        elif 0x20000000 <= addr < 0x20020000:
-            ram += size
-        if name == '.data':
-            flash += size
-print(flash, ram)
-PY
-)
+text=$(python3 scripts/firmware_size.py "$elf")
 read -r flash ram <<<"$text"
 stack_report=$(python3 scripts/stack_estimate.py "$elf")
 echo "$stack_report"
