@@ -1,0 +1,116 @@
+//! The device end and the host client over the simulated device's pipe.
+
+use link::client::{Client, ClientError};
+use link::message::SAMPLES_PER_BLOCK;
+use link::sim::{spawn, SimConfig};
+use link::storage::{decode_params, encode_params, PARAMS_MAX};
+use link::{BlockTracker, EventKind, Refusal};
+use monitor::{Params, Sample};
+use std::time::Duration;
+
+fn config(state: Option<std::path::PathBuf>, n: u32) -> SimConfig {
+    SimConfig {
+        firmware: "0.1.0",
+        serial: "SIM-0001".into(),
+        period_us: 1000,
+        source: Box::new(move |tick| {
+            (tick < n).then(|| Sample {
+                t_s: f64::from(tick) * 1e-3,
+                p_supply_bar: Some(50.0 + tick as f32 * 1e-3),
+                p_piston_bar: (tick % 97 != 0).then_some(20.0),
+                p_rod_bar: Some(12.0),
+                p_tank_bar: Some(0.8),
+                x_piston_m: Some(0.05),
+                u_valve: Some(0.0),
+                temp_oil_c: None,
+            })
+        }),
+        state,
+        drop_every: None,
+        corrupt_every: None,
+        default: Params::nominal(),
+    }
+}
+
+#[test]
+fn upload_read_back_events_and_reboot() {
+    let dir = tempfile_dir();
+    let state = dir.join("flash.bin");
+    let mut enc = [0u8; PARAMS_MAX];
+    let mut p = Params::nominal();
+    p.valve.null_offset = 0.002;
+    let enc = encode_params(&p, &mut enc).unwrap().to_vec();
+    {
+        let mut c = Client::new(spawn(config(Some(state.clone()), 0)).unwrap()).unwrap();
+        let id = c.identity().unwrap();
+        assert_eq!(id.serial, "SIM-0001");
+        assert_eq!(id.params.version, 0);
+        assert_eq!(id.boot, 1);
+        let new = c.upload_params(&enc).unwrap();
+        assert_eq!(new.params.version, 1);
+        assert_eq!(new.params.crc, link::frame::CRC32.checksum(&enc));
+        assert_eq!(decode_params(&c.read_params().unwrap()).unwrap(), p);
+        // A set that fails validation is refused naming the field.
+        let mut bad = p.clone();
+        bad.fluid.bulk_modulus_bar = -1.0;
+        let mut b = [0u8; PARAMS_MAX];
+        let b = encode_params(&bad, &mut b).unwrap().to_vec();
+        match c.upload_params(&b) {
+            Err(ClientError::Refused {
+                reason: Refusal::Invalid,
+                field,
+            }) => {
+                assert_eq!(field, "fluid.bulk_modulus_bar")
+            }
+            r => panic!("{r:?}"),
+        }
+        assert_eq!(c.identity().unwrap().params, new.params);
+    }
+    // Reboot: the set and the events are still there.
+    let mut c = Client::new(spawn(config(Some(state), 0)).unwrap()).unwrap();
+    let id = c.identity().unwrap();
+    assert_eq!((id.params.version, id.boot), (1, 2));
+    let ev = c.read_events().unwrap();
+    let kinds: Vec<_> = ev.iter().map(|e| (e.boot, e.kind)).collect();
+    assert!(
+        matches!(kinds[0], (1, EventKind::Reset { .. })),
+        "{kinds:?}"
+    );
+    assert!(matches!(kinds[1], (1, EventKind::ParamsChanged { params }) if params == id.params));
+    assert!(matches!(kinds[2], (2, EventKind::Reset { .. })));
+    assert_eq!(kinds.len(), 3);
+}
+
+#[test]
+fn stream_counts_dropped_and_corrupted_blocks() {
+    let n_blocks = 200u32;
+    let mut cfg = config(None, n_blocks * SAMPLES_PER_BLOCK as u32);
+    cfg.drop_every = Some(7);
+    cfg.corrupt_every = Some(11);
+    let mut c = Client::new(spawn(cfg).unwrap()).unwrap();
+    c.start_stream().unwrap();
+    let mut t = BlockTracker::default();
+    let mut samples = 0;
+    while let Some(b) = c.next_block(Duration::from_millis(300)).unwrap() {
+        t.accept(b.seq);
+        assert_eq!(b.first_tick, b.seq * SAMPLES_PER_BLOCK as u32);
+        samples += b.samples.len();
+    }
+    let (last, dropped) = c.stop_stream().unwrap();
+    t.finish(last);
+    let lost_drop = n_blocks / 7;
+    let lost_crc = (1..=n_blocks).filter(|k| k % 11 == 0 && k % 7 != 0).count() as u64;
+    assert_eq!(last, n_blocks - 1);
+    assert_eq!(dropped, lost_drop);
+    assert_eq!(t.lost, u64::from(lost_drop) + lost_crc);
+    assert_eq!(t.received + t.lost, u64::from(n_blocks));
+    assert_eq!(samples as u64, t.received * SAMPLES_PER_BLOCK as u64);
+    assert_eq!(c.stats().crc + c.stats().malformed, lost_crc as u32);
+}
+
+fn tempfile_dir() -> std::path::PathBuf {
+    let d = std::env::temp_dir().join(format!("link-sim-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
