@@ -114,3 +114,110 @@ fn tempfile_dir() -> std::path::PathBuf {
     std::fs::create_dir_all(&d).unwrap();
     d
 }
+
+#[test]
+fn device_refuses_broken_uploads_and_keeps_the_active_set() {
+    use link::frame::{encode, Decoder, MAX_WIRE};
+    use link::message::Message;
+    use link::ram_flash::RamFlash;
+    use link::{Device, DeviceInfo, ResetCause, Storage};
+    type F = RamFlash<4096>;
+    let s = Storage::new(F::new(2), 0..8192, F::new(2), 0..8192);
+    let info = DeviceInfo {
+        firmware: "t",
+        serial: "x".try_into().unwrap(),
+        period_us: 1000,
+    };
+    let mut dev =
+        embassy_futures::block_on(Device::start(s, info, &Params::nominal(), ResetCause::Pin));
+    let mut ask = |m: Message<'_>| -> String {
+        let mut wire = [0u8; MAX_WIRE];
+        let n = encode(9, &m, &mut wire).unwrap();
+        let mut d = Decoder::new();
+        let mut reply = [0u8; MAX_WIRE];
+        let mut r = 0;
+        for &b in &wire[..n] {
+            if let Some(Ok(f)) = d.push(b) {
+                r = embassy_futures::block_on(dev.handle(&f, 0, &mut reply));
+            }
+        }
+        let mut d = Decoder::new();
+        let mut out = String::new();
+        for &b in &reply[..r] {
+            if let Some(Ok(f)) = d.push(b) {
+                assert_eq!(f.seq, 9);
+                out = format!("{:?}", f.msg);
+            }
+        }
+        out
+    };
+    let mut enc = [0u8; PARAMS_MAX];
+    let enc = encode_params(&Params::nominal(), &mut enc)
+        .unwrap()
+        .to_vec();
+    let crc = link::frame::CRC32.checksum(&enc);
+    // No begin.
+    assert!(ask(Message::ParamsCommit).contains("Unexpected"));
+    assert!(ask(Message::ParamsChunk {
+        offset: 0,
+        data: &enc[..8]
+    })
+    .contains("Unexpected"));
+    // Too large.
+    assert!(ask(Message::ParamsBegin { len: 1 << 20, crc }).contains("TooLarge"));
+    // Out of order.
+    assert_eq!(
+        ask(Message::ParamsBegin {
+            len: enc.len() as u32,
+            crc
+        }),
+        "Ack"
+    );
+    assert!(ask(Message::ParamsChunk {
+        offset: 8,
+        data: &enc[8..16]
+    })
+    .contains("OutOfOrder"));
+    // Incomplete, then wrong CRC.
+    assert_eq!(
+        ask(Message::ParamsChunk {
+            offset: 0,
+            data: &enc[..100]
+        }),
+        "Ack"
+    );
+    assert!(ask(Message::ParamsCommit).contains("Incomplete"));
+    assert_eq!(
+        ask(Message::ParamsBegin {
+            len: enc.len() as u32,
+            crc: crc ^ 1
+        }),
+        "Ack"
+    );
+    for (i, c) in enc.chunks(128).enumerate() {
+        assert_eq!(
+            ask(Message::ParamsChunk {
+                offset: (i * 128) as u32,
+                data: c
+            }),
+            "Ack"
+        );
+    }
+    assert!(ask(Message::ParamsCommit).contains("Incomplete"));
+    // Not a parameter set.
+    let junk = vec![0xAAu8; 40];
+    let jcrc = link::frame::CRC32.checksum(&junk);
+    assert_eq!(ask(Message::ParamsBegin { len: 40, crc: jcrc }), "Ack");
+    assert_eq!(
+        ask(Message::ParamsChunk {
+            offset: 0,
+            data: &junk
+        }),
+        "Ack"
+    );
+    assert!(ask(Message::ParamsCommit).contains("Undecodable"));
+    // Host-side messages are not commands.
+    assert!(ask(Message::Ack).contains("Unexpected"));
+    assert_eq!(dev.params().id.version, 0);
+    assert!(!dev.take_changed());
+}
