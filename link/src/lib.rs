@@ -33,4 +33,4 @@ pub use message::{
     WireSample,
 };
 pub use storage::{Loaded, Storage, StoreError};
-pub use stream::{Accept, BlockBuilder, BlockTracker};
+pub use stream::{Accept, BlockBuilder, BlockTracker, StreamClock};

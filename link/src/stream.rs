@@ -128,3 +128,53 @@ impl BlockTracker {
         missing
     }
 }
+
+/// Host side: the index of each block's first sample since the stream's
+/// first sample, from the device's sample counter (`first_tick`, which
+/// wraps after 2³² samples, 49.7 days at 1 kHz) — so time in a recording
+/// keeps increasing across the wrap and across lost blocks.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct StreamClock {
+    last: Option<(u64, u32)>,
+}
+
+impl StreamClock {
+    /// Index of the first sample of an accepted (new) block.
+    pub fn first_index(&mut self, seq: u32, first_tick: u32) -> u64 {
+        let index = match self.last {
+            // Streams start at block 0, on a block boundary.
+            None => u64::from(seq) * SAMPLES_PER_BLOCK as u64,
+            Some((index, tick)) => index + u64::from(first_tick.wrapping_sub(tick)),
+        };
+        self.last = Some((index, first_tick));
+        index
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn clock_survives_the_counter_wrap_and_gaps() {
+        let mut c = StreamClock::default();
+        let n = SAMPLES_PER_BLOCK as u32;
+        let t0 = u32::MAX - 25;
+        // Block 0 lost: the first received is block 1.
+        assert_eq!(c.first_index(1, t0.wrapping_add(n)), u64::from(n));
+        assert_eq!(c.first_index(2, t0.wrapping_add(2 * n)), 2 * u64::from(n));
+        // Block 3 lost, block 4 after the wrap.
+        assert_eq!(c.first_index(4, t0.wrapping_add(4 * n)), 4 * u64::from(n));
+    }
+
+    #[test]
+    fn tracker_counts_gaps_duplicates_and_the_end() {
+        let mut t = BlockTracker::default();
+        assert_eq!(t.accept(1), Accept::New { lost: 1 });
+        assert_eq!(t.accept(1), Accept::Duplicate);
+        assert_eq!(t.accept(0), Accept::Duplicate);
+        assert_eq!(t.accept(5), Accept::New { lost: 3 });
+        assert_eq!(t.finish(7), 2);
+        assert_eq!((t.received, t.lost, t.duplicates), (2, 6, 2));
+    }
+}

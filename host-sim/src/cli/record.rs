@@ -4,7 +4,7 @@ use anyhow::{bail, Context, Result};
 use host_sim::port::{connect, link_err};
 use host_sim::recording::RecordingWriter;
 use link::message::SAMPLES_PER_BLOCK;
-use link::{Accept, BlockTracker};
+use link::{Accept, BlockTracker, StreamClock};
 use monitor::Channel;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -85,7 +85,7 @@ pub fn run(a: Args) -> Result<ExitCode> {
     c.start_stream().map_err(&err)?;
     let mut writer: Option<RecordingWriter<_>> = None;
     let mut tracker = BlockTracker::default();
-    let mut tick0: Option<u64> = None;
+    let mut clock = StreamClock::default();
     let mut samples = 0u64;
     let mut idle = false;
     'stream: while !stop.load(Ordering::SeqCst) {
@@ -99,11 +99,9 @@ pub fn run(a: Args) -> Result<ExitCode> {
         if lost > 0 {
             bar.set_message(format!("{} lost blocks", tracker.lost));
         }
-        // Time from the stream's first sample (block 0), even if that
-        // block was lost.
-        let t0 = *tick0.get_or_insert(
-            u64::from(b.first_tick).wrapping_sub(u64::from(b.seq) * SAMPLES_PER_BLOCK as u64),
-        );
+        // Time from the stream's first sample (block 0, even if lost), by
+        // the device's sample counter.
+        let first = clock.first_index(b.seq, b.first_tick);
         if writer.is_none() {
             // The oil temperature column if the sensor is fitted.
             let temp = b.samples[0].valid & Channel::TempOil.bit() != 0;
@@ -114,8 +112,7 @@ pub fn run(a: Args) -> Result<ExitCode> {
         }
         let w = writer.as_mut().expect("created above");
         for (i, ws) in b.samples.iter().enumerate() {
-            let tick = u64::from(b.first_tick) + i as u64;
-            let t = tick.wrapping_sub(t0) as f64 * period;
+            let t = (first + i as u64) as f64 * period;
             if a.duration.is_some_and(|d| t >= d - period / 2.0) {
                 break 'stream;
             }
