@@ -176,19 +176,23 @@ impl<P: NorFlash, E: NorFlash> Device<P, E> {
             }
             Message::ParamsChunk { offset, data } => {
                 let u = &mut self.upload;
-                let off = *offset as usize;
                 if !u.open {
                     return refuse(Refusal::Unexpected, "", out);
                 }
-                if off + data.len() <= u.got && u.buf[off..off + data.len()] == **data {
+                // No overflow on a 32-bit target, whatever the offset.
+                let off = *offset as usize;
+                let Some(end) = off.checked_add(data.len()) else {
+                    return refuse(Refusal::OutOfOrder, "", out);
+                };
+                if end <= u.got && u.buf[off..end] == **data {
                     // A repeat (the host did not see our ack).
                 } else if off != u.got {
                     return refuse(Refusal::OutOfOrder, "", out);
-                } else if off + data.len() > u.len {
+                } else if end > u.len {
                     return refuse(Refusal::TooLarge, "", out);
                 } else {
-                    u.buf[off..off + data.len()].copy_from_slice(data);
-                    u.got += data.len();
+                    u.buf[off..end].copy_from_slice(data);
+                    u.got = end;
                 }
                 encode(seq, &Message::Ack, out).unwrap_or(0)
             }

@@ -223,3 +223,146 @@ fn a_block_frame_fits_with_room() {
         f.len()
     );
 }
+
+mod device_commands {
+    //! Any sequence of commands, however wrong: the device never panics,
+    //! answers every command with exactly one frame carrying its sequence
+    //! number, and the active set is always a valid one.
+    use link::frame::{encode, Decoder, MAX_WIRE};
+    use link::message::{Message, CHUNK};
+    use link::ram_flash::RamFlash;
+    use link::storage::{encode_params, PARAMS_MAX};
+    use link::{Device, DeviceInfo, ResetCause, Storage};
+    use monitor::Params;
+    use proptest::prelude::*;
+
+    #[derive(Clone, Debug)]
+    enum Cmd {
+        Begin { len: u32, good_crc: bool },
+        Chunk { offset: u32, len: usize, flip: bool },
+        Commit,
+        Read(u32),
+        Events(u32),
+        Identity,
+        Start,
+        Stop,
+        Samples(u8),
+    }
+
+    fn cmd() -> impl Strategy<Value = Cmd> {
+        prop_oneof![
+            (
+                prop_oneof![Just(0u32), Just(825), 0u32..2000, Just(u32::MAX)],
+                any::<bool>()
+            )
+                .prop_map(|(len, good_crc)| Cmd::Begin { len, good_crc }),
+            (
+                prop_oneof![
+                    (0u32..8).prop_map(|k| k * CHUNK as u32),
+                    any::<u32>(),
+                    Just(u32::MAX - 3)
+                ],
+                0usize..=CHUNK,
+                prop::bool::weighted(0.1),
+            )
+                .prop_map(|(offset, len, flip)| Cmd::Chunk { offset, len, flip }),
+            Just(Cmd::Commit),
+            any::<u32>().prop_map(Cmd::Read),
+            (0u32..20).prop_map(Cmd::Events),
+            Just(Cmd::Identity),
+            Just(Cmd::Start),
+            Just(Cmd::Stop),
+            any::<u8>().prop_map(Cmd::Samples),
+        ]
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(300))]
+        #[test]
+        fn any_command_sequence(cmds in proptest::collection::vec(cmd(), 1..60)) {
+            type F = RamFlash<4096>;
+            let storage = Storage::new(F::new(2), 0..8192, F::new(2), 0..8192);
+            let info = DeviceInfo { firmware: "t", serial: "s".try_into().unwrap(), period_us: 1000 };
+            let mut dev = embassy_futures::block_on(Device::start(
+                storage, info, &Params::nominal(), ResetCause::Software));
+            let mut p = Params::nominal();
+            p.valve.null_offset = 0.001;
+            let mut enc = [0u8; PARAMS_MAX];
+            let enc = encode_params(&p, &mut enc).unwrap().to_vec();
+            let crc = link::frame::CRC32.checksum(&enc);
+            let mut tick = 0u32;
+            for (i, c) in cmds.iter().enumerate() {
+                let seq = i as u16;
+                let data: Vec<u8>;
+                let msg = match c {
+                    Cmd::Begin { len, good_crc } => Message::ParamsBegin {
+                        len: *len,
+                        crc: if *good_crc { crc } else { crc ^ 0x100 },
+                    },
+                    Cmd::Chunk { offset, len, flip } => {
+                        let o = (*offset as usize).min(enc.len());
+                        let mut d = enc[o..(o + len).min(enc.len())].to_vec();
+                        if *flip && !d.is_empty() { d[0] ^= 1; }
+                        data = d;
+                        Message::ParamsChunk { offset: *offset, data: &data }
+                    }
+                    Cmd::Commit => Message::ParamsCommit,
+                    Cmd::Read(o) => Message::ParamsRead { offset: *o },
+                    Cmd::Events(s) => Message::EventsRead { skip: *s },
+                    Cmd::Identity => Message::GetIdentity,
+                    Cmd::Start => Message::StartStream,
+                    Cmd::Stop => Message::StopStream,
+                    Cmd::Samples(n) => {
+                        for _ in 0..*n {
+                            let _ = dev.sample(tick, &monitor::Sample::default());
+                            tick += 1;
+                        }
+                        continue;
+                    }
+                };
+                let mut wire = [0u8; MAX_WIRE];
+                let n = encode(seq, &msg, &mut wire).unwrap();
+                let mut d = Decoder::new();
+                let mut reply = [0u8; MAX_WIRE];
+                let mut r = 0;
+                for &b in &wire[..n] {
+                    if let Some(Ok(f)) = d.push(b) {
+                        r = embassy_futures::block_on(dev.handle(&f, tick, &mut reply));
+                    }
+                }
+                prop_assert!(r > 0);
+                let mut d = Decoder::new();
+                let mut replies = 0;
+                for &b in &reply[..r] {
+                    if let Some(f) = d.push(b) {
+                        prop_assert_eq!(f.unwrap().seq, seq);
+                        replies += 1;
+                    }
+                }
+                prop_assert_eq!(replies, 1);
+                let active = dev.params();
+                prop_assert!(active.params.validate().is_ok());
+                prop_assert!(active.params == Params::nominal() || active.params == p);
+            }
+            // What the device reads back is its active set.
+            let mut wire = [0u8; MAX_WIRE];
+            let n = encode(1, &Message::ParamsRead { offset: 0 }, &mut wire).unwrap();
+            let mut d = Decoder::new();
+            let mut reply = [0u8; MAX_WIRE];
+            let mut r = 0;
+            for &b in &wire[..n] {
+                if let Some(Ok(f)) = d.push(b) {
+                    r = embassy_futures::block_on(dev.handle(&f, 0, &mut reply));
+                }
+            }
+            let mut d = Decoder::new();
+            for &b in &reply[..r] {
+                if let Some(Ok(f)) = d.push(b) {
+                    if let Message::ParamsData { total, .. } = f.msg {
+                        prop_assert_eq!(total as usize, encode_params(&dev.params().params, &mut [0u8; PARAMS_MAX]).unwrap().len());
+                    }
+                }
+            }
+        }
+    }
+}
