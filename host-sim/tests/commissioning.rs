@@ -191,3 +191,73 @@ fn a_port_that_does_not_exist_is_a_clear_error() {
         text(&o.stderr)
     );
 }
+
+/// The real serial-port path (`serialport`, termios, read timeouts): the
+/// simulated device behind a pseudo-terminal, `host-sim` on its other end
+/// as on `/dev/ttyACM0`.
+#[cfg(unix)]
+#[test]
+fn record_and_upload_over_a_serial_port() {
+    use serialport::{SerialPort, TTYPort};
+    use std::io::{Read, Write};
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::sync::Arc;
+    use std::time::Duration;
+
+    let dir = tempfile::tempdir().unwrap();
+    let input = simulate(dir.path(), "1");
+    let (mut master, slave) = TTYPort::pair().expect("a pseudo-terminal");
+    let path = slave.name().expect("pty name");
+    master.set_timeout(Duration::from_millis(20)).unwrap();
+    let mut master_rx = master.try_clone_native().unwrap();
+    let want = samples(&input);
+    let cfg = link::sim::SimConfig {
+        firmware: "9.9.9",
+        serial: "PTY-7".into(),
+        period_us: 1000,
+        source: Box::new(move |tick| want.get(tick as usize).copied()),
+        state: None,
+        drop_every: None,
+        corrupt_every: None,
+        default: Params::nominal(),
+    };
+    let mut dev = link::sim::spawn(cfg).unwrap();
+    dev.timeout = Duration::from_millis(5);
+    let stop = Arc::new(AtomicBool::new(false));
+    // One thread moves bytes both ways between the pty and the device.
+    let s2 = stop.clone();
+    let bridge = std::thread::spawn(move || {
+        let mut buf = [0u8; 4096];
+        while !s2.load(Ordering::SeqCst) {
+            match master_rx.read(&mut buf) {
+                Ok(n) if n > 0 => dev.write_all(&buf[..n]).unwrap(),
+                _ => {}
+            }
+            loop {
+                match dev.read(&mut buf) {
+                    Ok(n) if n > 0 => master.write_all(&buf[..n]).unwrap(),
+                    _ => break,
+                }
+            }
+        }
+    });
+    let out = dir.path().join("pty.csv");
+    let (_, err) = ok(&[
+        "record",
+        &path,
+        "-o",
+        out.to_str().unwrap(),
+        "--duration",
+        "1",
+    ]);
+    assert!(err.contains("lost blocks: 0 of 100"), "{err}");
+    assert!(err.contains("firmware 9.9.9 serial PTY-7"), "{err}");
+    assert_eq!(samples(out.to_str().unwrap()), samples(&input));
+    let good = dir.path().join("site.toml");
+    std::fs::write(&good, "[valve]\nnull_offset = 0.003\n").unwrap();
+    let (up, _) = ok(&["params", "upload", &path, good.to_str().unwrap()]);
+    assert!(up.starts_with("active: parameter set version 1 "), "{up}");
+    stop.store(true, Ordering::SeqCst);
+    bridge.join().unwrap();
+    drop(slave);
+}
