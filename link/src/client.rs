@@ -99,7 +99,10 @@ pub struct Client<T: Read + Write> {
     dec: Decoder,
     seq: u16,
     blocks: VecDeque<SampleBlock>,
-    replies: VecDeque<(u16, Reply)>,
+    /// Replies with the number of blocks queued before each arrived.
+    replies: VecDeque<(u16, Reply, usize)>,
+    /// Blocks queued before the last reply returned by `request`.
+    blocks_before_reply: usize,
     /// How long to wait for a reply before sending the request again.
     pub timeout: Duration,
     /// Attempts per request.
@@ -118,6 +121,7 @@ impl<T: Read + Write> Client<T> {
             seq: 0,
             blocks: VecDeque::new(),
             replies: VecDeque::new(),
+            blocks_before_reply: 0,
             timeout: Duration::from_millis(500),
             attempts: 3,
         })
@@ -198,7 +202,7 @@ impl<T: Read + Write> Client<T> {
                 },
                 _ => continue,
             };
-            self.replies.push_back((seq, reply));
+            self.replies.push_back((seq, reply, self.blocks.len()));
         }
         Ok(())
     }
@@ -214,8 +218,9 @@ impl<T: Read + Write> Client<T> {
             let deadline = Instant::now() + self.timeout;
             while Instant::now() < deadline {
                 // Replies to older requests (answered late) are dropped.
-                while let Some((s, r)) = self.replies.pop_front() {
+                while let Some((s, r, before)) = self.replies.pop_front() {
                     if s == seq {
+                        self.blocks_before_reply = before;
                         return match r {
                             Reply::Refused { reason, field } => {
                                 Err(ClientError::Refused { reason, field })
@@ -242,11 +247,17 @@ impl<T: Read + Write> Client<T> {
         }
     }
 
-    /// Start the sample stream.
+    /// Start the sample stream (block numbers from 0). Blocks of an
+    /// earlier stream still on the way (a host that went away without
+    /// stopping it) arrive before the acknowledgement and are discarded.
     pub fn start_stream(&mut self) -> Result<(), ClientError> {
         self.blocks.clear();
         match self.request(&Message::StartStream, true)? {
-            Reply::Ack => Ok(()),
+            Reply::Ack => {
+                let stale = self.blocks_before_reply.min(self.blocks.len());
+                self.blocks.drain(..stale);
+                Ok(())
+            }
             r => Err(unexpected(&r)),
         }
     }

@@ -90,8 +90,11 @@ impl Write for SimPort {
 
 impl Drop for SimPort {
     fn drop(&mut self) {
-        // Closing our end stops the device, which saves its flash.
+        // Closing both ends stops the device (also one blocked sending to
+        // us), which then saves its flash.
         self.to_dev = None;
+        let (_, closed) = mpsc::sync_channel(1);
+        drop(std::mem::replace(&mut self.from_dev, closed));
         if let Some(t) = self.thread.take() {
             let _ = t.join();
         }

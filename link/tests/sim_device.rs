@@ -221,3 +221,22 @@ fn device_refuses_broken_uploads_and_keeps_the_active_set() {
     assert_eq!(dev.params().id.version, 0);
     assert!(!dev.take_changed());
 }
+
+#[test]
+fn a_new_stream_discards_blocks_of_an_old_one() {
+    let mut c = Client::new(spawn(config(None, 1_000_000)).unwrap()).unwrap();
+    c.start_stream().unwrap();
+    for _ in 0..50 {
+        c.next_block(Duration::from_millis(300)).unwrap().unwrap();
+    }
+    // Restart without stopping: old blocks are still in the pipe.
+    c.start_stream().unwrap();
+    let mut t = BlockTracker::default();
+    for _ in 0..200 {
+        let b = c.next_block(Duration::from_millis(300)).unwrap().unwrap();
+        assert_eq!(t.accept(b.seq), link::Accept::New { lost: 0 }, "{}", b.seq);
+    }
+    let (last, dropped) = c.stop_stream().unwrap();
+    assert!(last >= 199);
+    assert_eq!((t.lost, t.duplicates, dropped), (0, 0, 0));
+}
