@@ -11,6 +11,7 @@ pub mod decode;
 pub mod eval;
 pub mod golden;
 pub mod plot;
+pub mod port;
 pub mod recording;
 pub mod replay;
 pub mod sim;

@@ -5,8 +5,11 @@ mod calibrate;
 mod decode;
 mod docs;
 mod eval;
+mod events;
 mod golden;
+mod params;
 mod plot;
+mod record;
 mod replay;
 mod simulate;
 
@@ -49,6 +52,19 @@ enum Command {
     /// (`candump -l`: `(sec.usec) iface id#hex`), checking every frame's
     /// CRC and counter.
     Decode(decode::Args),
+    /// Record what the monitor sees from a device over its serial link
+    /// (USB) into a recording for `calibrate` and `replay`; reports lost
+    /// blocks.
+    Record(record::Args),
+    /// Upload or show the device's parameter set (only over the serial
+    /// link, never over CAN).
+    Params {
+        #[command(subcommand)]
+        action: params::Action,
+    },
+    /// The device's event memory (alarms, sensor faults, acknowledges,
+    /// resets, parameter changes), kept in flash across resets.
+    Events(events::Args),
     /// Shell completions (bash, zsh, fish, elvish, powershell) on stdout.
     Completions(docs::CompletionArgs),
     /// The manual page (roff) on stdout: `host-sim man > host-sim.1`.
@@ -108,6 +124,9 @@ fn run(cli: Cli) -> Result<ExitCode> {
         Command::Simulate(a) => simulate::run(a),
         Command::Eval(a) => eval::run(a),
         Command::Decode(a) => decode::run(a),
+        Command::Record(a) => record::run(a),
+        Command::Params { action } => params::run(action),
+        Command::Events(a) => events::run(a),
         Command::Completions(a) => docs::completions(a),
         Command::Man => docs::man(),
         Command::Golden { action } => golden::run(action),
