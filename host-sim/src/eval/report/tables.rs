@@ -1,4 +1,4 @@
-//! The report's tables: leaks, healthy runs, step tests, faults, conditions, calibration.
+//! The report's tables: leaks, healthy, step tests, faults, conditions, calibration.
 
 use super::{histogram, kind_order, med_max, opt, pct, size_key};
 use crate::eval::exec::{CellResult, RunResult};
