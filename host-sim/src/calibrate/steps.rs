@@ -1,0 +1,313 @@
+//! Fit steps 1–5 on (part of) a recording, the held-out part, the quality checks.
+
+use super::fit::{self, Motion, Quality};
+use super::{
+    check, CalibrationError, Fit, Mechanics, ALL, FIT_FRACTION, LENIENT_VALVE_R2,
+    LENIENT_VALVE_RESIDUAL, MAX_FORCE_EXCESS_N, MAX_VALVE_RESIDUAL, MIN_REGION_EVIDENCE_S,
+    MIN_VALVE_R2, REGIONS,
+};
+use monitor::physics::units::{LEAK_UNIT, LPM_PER_M3S};
+use monitor::{Params, Sample};
+
+/// One run of fit steps 1–5 on (part of) a recording.
+pub(super) struct PlantFit {
+    pub(super) params: Params,
+    pub(super) fits: Vec<Fit>,
+    pub(super) warnings: Vec<String>,
+    pub(super) quality: Quality,
+    pub(super) baseline_notes: Vec<String>,
+}
+
+/// A held-out part of the recording: samples `range`, times `t`.
+#[derive(Clone, Debug)]
+pub(super) struct HeldOut {
+    range: std::ops::Range<usize>,
+    pub(super) t: (f64, f64),
+    pub(super) name: &'static str,
+}
+
+impl HeldOut {
+    /// The held-out third number `k` (0 first, 2 last).
+    pub(super) fn third(samples: &[Sample], k: usize, name: &'static str) -> Self {
+        let (t0, t1) = (samples[0].t_s, samples[samples.len() - 1].t_s);
+        let held = 1.0 - FIT_FRACTION;
+        let ta = t0 + k as f64 * held * (t1 - t0);
+        let tb = if k == 2 {
+            f64::INFINITY
+        } else {
+            ta + held * (t1 - t0)
+        };
+        let a = samples.partition_point(|s| s.t_s < ta);
+        let b = samples.partition_point(|s| s.t_s < tb);
+        Self {
+            range: a..b,
+            t: (ta, tb.min(t1)),
+            name,
+        }
+    }
+
+    /// The rest: the pieces the validation fit uses.
+    pub(super) fn fit_pieces<'a>(&self, samples: &'a [Sample]) -> Vec<&'a [Sample]> {
+        [&samples[..self.range.start], &samples[self.range.end..]]
+            .into_iter()
+            .filter(|p| !p.is_empty())
+            .collect()
+    }
+}
+
+/// Golden-section search of the air fraction minimising the healthy NIS.
+/// The bulk modulus only shows in pressure transients, so a recording may
+/// not determine it: the fit is kept only if the optimum lies inside the
+/// search range and improves the NIS by at least 1 %.
+fn fit_air(
+    samples: &[&[Sample]],
+    p: &mut Params,
+    fits: &mut Vec<Fit>,
+    warnings: &mut Vec<String>,
+) -> Result<(), CalibrationError> {
+    let nis_at = |air: f64, p: &Params| -> Result<f64, CalibrationError> {
+        let mut q = p.clone();
+        q.fluid.air_fraction = air;
+        Ok(check::run_pieces(samples, &q, ALL)?.healthy_nis)
+    };
+    let (lo0, hi0) = (0.002f64.ln(), 0.06f64.ln());
+    let (mut lo, mut hi) = (lo0, hi0);
+    let r = 0.618_033_988_749_895;
+    let mut a = hi - r * (hi - lo);
+    let mut b = lo + r * (hi - lo);
+    let mut fa = nis_at(a.exp(), p)?;
+    let mut fb = nis_at(b.exp(), p)?;
+    for _ in 0..7 {
+        if fa < fb {
+            hi = b;
+            b = a;
+            fb = fa;
+            a = hi - r * (hi - lo);
+            fa = nis_at(a.exp(), p)?;
+        } else {
+            lo = a;
+            a = b;
+            fa = fb;
+            b = lo + r * (hi - lo);
+            fb = nis_at(b.exp(), p)?;
+        }
+    }
+    let (best, nis) = if fa < fb { (a, fa) } else { (b, fb) };
+    let before = p.fluid.air_fraction;
+    let nis_before = nis_at(before, p)?;
+    let margin = 0.05 * (hi0 - lo0);
+    let at_edge = best - lo0 < margin || hi0 - best < margin;
+    if at_edge || nis > 0.99 * nis_before {
+        warnings.push(format!(
+            "entrained air not determined by this recording (best {:.2} %{}, NIS {nis:.3} vs {nis_before:.3}); kept {:.2} %",
+            100.0 * best.exp(),
+            if at_edge { " at the search limit" } else { "" },
+            100.0 * before
+        ));
+        return Ok(());
+    }
+    p.fluid.air_fraction = best.exp();
+    fits.push(Fit {
+        what: "entrained air (effective bulk modulus)".into(),
+        value: format!("{:.2} % (was {:.2} %)", 100.0 * best.exp(), 100.0 * before),
+        quality: format!("healthy-filter mean NIS {nis:.3} (was {nis_before:.3})"),
+    });
+    Ok(())
+}
+
+/// Fit steps 1–5 on `samples`, starting from `start` (step 3 only if
+/// `search_air`). Stops after the regressions if their quality is too poor
+/// (see `quality_problems`).
+pub(super) fn fit_plant(
+    samples: &[&[Sample]],
+    start: &Params,
+    search_air: bool,
+    mechanics: Mechanics,
+) -> Result<PlantFit, CalibrationError> {
+    let mut p = start.clone();
+    p.baseline = Default::default();
+    let mut fits = Vec::new();
+    let mut warnings = Vec::new();
+    let mut quality = Quality::default();
+    let mut baseline_notes = Vec::new();
+    match mechanics {
+        Mechanics::Strict => {
+            let d = fit::prepare_pieces(samples);
+            fit::fit_valve(&d, &mut p, &mut fits, &mut warnings, &mut quality);
+            fit::fit_load(&d, &mut p, &mut fits, &mut quality);
+            quality.problems.extend(quality_problems(&quality));
+        }
+        Mechanics::Lenient => {
+            // Each regression on its own: what is implausible is kept and
+            // said, what fits well enough is used.
+            let d = fit::prepare_pieces(samples);
+            let mut valve = p.clone();
+            let mut q = Quality::default();
+            let mut f = Vec::new();
+            fit::fit_valve(&d, &mut valve, &mut f, &mut warnings, &mut q);
+            let r2_ok = q
+                .valve_r2
+                .iter()
+                .flatten()
+                .all(|r2| *r2 >= LENIENT_VALVE_R2);
+            let res_ok = q
+                .valve_rel_residual
+                .iter()
+                .flatten()
+                .all(|r| *r <= LENIENT_VALVE_RESIDUAL);
+            if q.problems.is_empty() && r2_ok && res_ok {
+                p.valve = valve.valve;
+                fits.extend(f);
+            } else {
+                warnings.push(format!(
+                    "valve not fitted (kept): {}",
+                    q.problems
+                        .iter()
+                        .cloned()
+                        .chain(quality_problems(&q))
+                        .collect::<Vec<_>>()
+                        .join("; ")
+                ));
+            }
+            let mut load = p.clone();
+            let mut ql = Quality::default();
+            let mut fl = Vec::new();
+            fit::fit_load(&d, &mut load, &mut fl, &mut ql);
+            if ql.problems.is_empty() {
+                p.load = load.load;
+                p.friction = load.friction;
+                fits.extend(fl);
+                quality.force_residual_n = ql.force_residual_n;
+            } else {
+                warnings.push(format!(
+                    "load not fitted (kept): {}",
+                    ql.problems.join("; ")
+                ));
+            }
+            quality.valve_r2 = q.valve_r2;
+            quality.valve_rel_residual = q.valve_rel_residual;
+        }
+        Mechanics::Kept => {}
+    }
+    let done = |p, fits, warnings, quality, baseline_notes| {
+        Ok(PlantFit {
+            params: p,
+            fits,
+            warnings,
+            quality,
+            baseline_notes,
+        })
+    };
+    if !quality.problems.is_empty() {
+        return done(p, fits, warnings, quality, baseline_notes);
+    }
+    if search_air {
+        fit_air(samples, &mut p, &mut fits, &mut warnings)?;
+    }
+    // 4. Healthy leakage: the model's own coefficients absorb the mean.
+    let mean = check::run_pieces(samples, &p, ALL)?.both_mean();
+    // l/min at 10 bar → l/min/bar.
+    let per_bar = |theta: f64| theta * LEAK_UNIT * 1e5 * LPM_PER_M3S;
+    let (di, de) = (per_bar(mean[0]), per_bar(mean[1]));
+    let seal = (p.leakage.seal_lpm_per_bar + di).max(0.0);
+    let ext = (p.leakage.external_lpm_per_bar + de).clamp(-0.009, 0.5);
+    fits.push(Fit {
+        what: "healthy leakage".into(),
+        value: format!(
+            "seal {seal:.5} l/min/bar ({di:+.5}), rod side → tank {ext:.5} l/min/bar ({de:+.5})"
+        ),
+        quality: "evidence-weighted mean of the both-filter's leak estimates".into(),
+    });
+    p.leakage.seal_lpm_per_bar = seal;
+    p.leakage.external_lpm_per_bar = ext;
+    // 5. Per-region baseline: what remains, region by region.
+    let run = check::run_pieces(samples, &p, ALL)?;
+    let mut internal = [0.0; 3];
+    let mut external = [0.0; 3];
+    let mut cells = Vec::new();
+    for (k, name) in REGIONS.iter().enumerate() {
+        let [si, se, w] = run.region_sums[k];
+        if w >= MIN_REGION_EVIDENCE_S {
+            internal[k] = si / w;
+            external[k] = se / w;
+            cells.push(format!("{name} {w:.1} s"));
+        } else {
+            cells.push(format!(
+                "{name} {w:.1} s (< {MIN_REGION_EVIDENCE_S} s: left at 0)"
+            ));
+            baseline_notes.push(format!(
+                "{name}: only {w:.1} s of evidence, need {MIN_REGION_EVIDENCE_S} s; baseline left at 0"
+            ));
+        }
+    }
+    if internal.iter().chain(&external).any(|v| v.abs() >= 1.0) {
+        quality.problems.push(format!(
+            "the healthy installation still reads apparent leaks of {internal:.3?} / {external:.3?} l/min at 10 bar per region after calibration (±1 at most)"
+        ));
+    }
+    let f = |a: [f64; 3]| format!("[{:+.4}, {:+.4}, {:+.4}]", a[0], a[1], a[2]);
+    fits.push(Fit {
+        what: "baseline per region [retr., hold, ext.]".into(),
+        value: format!(
+            "internal {}, external {} l/min at 10 bar",
+            f(internal),
+            f(external)
+        ),
+        quality: format!("evidence {}", cells.join(", ")),
+    });
+    p.baseline.internal_lpm_per_10bar = internal;
+    p.baseline.external_lpm_per_10bar = external;
+    p.validate().map_err(CalibrationError::Params)?;
+    done(p, fits, warnings, quality, baseline_notes)
+}
+
+/// The regressions' quality against the refusal thresholds.
+fn quality_problems(q: &Quality) -> Vec<String> {
+    let mut out = Vec::new();
+    for (dir, name) in ["extend", "retract"].iter().enumerate() {
+        if let Some(r2) = q.valve_r2[dir] {
+            if r2 < MIN_VALVE_R2 {
+                out.push(format!(
+                    "valve {name} regression R² {r2:.3} < {MIN_VALVE_R2} (the flow does not follow the command as a valve's does)"
+                ));
+            }
+        }
+        if let Some(rel) = q.valve_rel_residual[dir] {
+            if rel > MAX_VALVE_RESIDUAL {
+                out.push(format!(
+                    "valve {name} regression residual {:.1} % of the flow > {:.0} %",
+                    100.0 * rel,
+                    100.0 * MAX_VALVE_RESIDUAL
+                ));
+            }
+        }
+    }
+    if let Some(ex) = q.force_excess_n() {
+        if ex > MAX_FORCE_EXCESS_N {
+            out.push(format!(
+                "force-balance residual {:.0} N, {ex:.0} N beyond the pressure noise's share > {MAX_FORCE_EXCESS_N:.0} N (a load the model does not describe)",
+                q.force_residual_n.unwrap_or(0.0)
+            ));
+        }
+    }
+    out
+}
+
+/// What the recording lacks in motion, if anything.
+pub(super) fn missing_motion(m: &Motion, need: f64, part: &str) -> Option<String> {
+    let short: Vec<String> = [(m.extend_s, "extending"), (m.retract_s, "retracting")]
+        .iter()
+        .filter(|(have, _)| *have < need)
+        .map(|(have, name)| format!("{:.1} s more {name}", need - have))
+        .collect();
+    (!short.is_empty()).then(|| {
+        format!(
+            "{part} has {:.1} s of quasi-steady extending and {:.1} s of quasi-steady retracting moves ({:.1} s at rest); \
+             calibration needs {need:.1} s in each direction there: {} (moves at a steady speed of at least 3 mm/s for 0.2 s or longer, at two or more speeds per direction)",
+            m.extend_s,
+            m.retract_s,
+            m.hold_s,
+            short.join(", ")
+        )
+    })
+}
