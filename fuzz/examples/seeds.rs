@@ -20,14 +20,14 @@ fn messages(i: usize) -> [Message; 5] {
     [
         Message::Status(StatusFrame {
             verdict: [Verdict::Healthy, Verdict::Internal, Verdict::External][i % 3],
-            leak_internal_ml_min: (i % 2 == 0).then_some(120 * i as i16),
+            leak_internal_ml_min: i.is_multiple_of(2).then_some(120 * i as i16),
             leak_external_ml_min: Some(-7),
             health: 0x0041 << (i % 3),
         }),
         Message::Alarm(AlarmFrame {
             state: AlarmState::ALL[i % AlarmState::ALL.len()],
             latched: LeakSet::ALL[i % 4],
-            relay_energised: i % 2 == 0,
+            relay_energised: i.is_multiple_of(2),
             faulted_channels: (i as u8).wrapping_mul(37),
             device_fault: (i % 9) as u8,
             changed_at_ms: (i as u32).wrapping_mul(0x2468_ACE1),
@@ -109,7 +109,7 @@ fn main() {
     writeln!(odd, "(1700000002.000300) can0 12345678#0011").unwrap();
     writeln!(odd, "(1700000002.000400) can0 301#0011223344556677_9").unwrap();
     writeln!(odd, "(1700000002.000500) can0 12#11:22:33#4455").unwrap();
-    odd += &candump_line(1_700_000_002.0006, &frames[1]).replace('\n', " R\n");
+    odd += &candump_line(1_700_000_002.000_6, &frames[1]).replace('\n', " R\n");
     write(&root.join("candump"), "skipped.log", odd.as_bytes());
     let mut gaps = String::new();
     for k in [0usize, 5, 15, 15, 40] {

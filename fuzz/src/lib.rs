@@ -10,8 +10,11 @@ pub mod params;
 pub mod protocol_decoder;
 pub mod recording;
 
+/// A target's body.
+pub type Target = fn(&[u8]);
+
 /// Every target by its name (the directory of its corpus).
-pub const TARGETS: [(&str, fn(&[u8])); 5] = [
+pub const TARGETS: [(&str, Target); 5] = [
     ("recording", recording::run),
     ("params", params::run),
     ("candump", candump::run),
