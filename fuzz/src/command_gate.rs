@@ -57,6 +57,17 @@ struct Harness {
     /// Last time a frame's tag was checked.
     last_check: Option<u64>,
     history: Vec<AnyFrame>,
+    stats: Stats,
+}
+
+/// How an input's frames fared (for the replay test: the seeds must reach
+/// acceptance).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Stats {
+    /// Accepted frames.
+    pub accepted: u32,
+    /// Rejected acknowledge attempts.
+    pub rejected: u32,
 }
 
 fn any(f: &CanFrame) -> AnyFrame {
@@ -116,6 +127,7 @@ impl Harness {
                 assert_eq!(a.counter, f.data[1] & 0x0F);
                 checked(self);
                 self.renewed(before);
+                self.stats.accepted += 1;
             }
             GateOutcome::Rejected(AckEvent {
                 t_ms,
@@ -123,6 +135,7 @@ impl Harness {
             }) => {
                 assert!(is_command, "other traffic rejected as a command");
                 assert_eq!(t_ms, t);
+                self.stats.rejected += 1;
                 if origin == Origin::Controller {
                     assert!(
                         !matches!(
@@ -170,6 +183,11 @@ impl Harness {
 /// on by a u16 (ms). Every frame is received at that time, with the event
 /// time an arbitrary u32.
 pub fn run(data: &[u8]) {
+    run_counting(data);
+}
+
+/// [`run`], counting outcomes.
+pub fn run_counting(data: &[u8]) -> Stats {
     let mut c = Cursor::new(data);
     let seed = c.u64();
     let key = AckKey::installation(KEY_BYTES);
@@ -181,6 +199,7 @@ pub fn run(data: &[u8]) {
         raised: 0,
         last_check: None,
         history: Vec::new(),
+        stats: Stats::default(),
     };
     while !c.is_empty() {
         let op = c.u8();
@@ -272,4 +291,5 @@ pub fn run(data: &[u8]) {
         let published = h.gate.frame(None, 0);
         assert_eq!(published.challenge, h.gate.challenges().current);
     }
+    h.stats
 }

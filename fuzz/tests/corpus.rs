@@ -44,3 +44,12 @@ fn every_corpus_entry_passes_its_target() {
         println!("{name}: {} inputs replayed", files.len());
     }
 }
+
+#[test]
+fn the_command_gate_seed_reaches_acceptance_and_rejection() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let data = std::fs::read(root.join("corpus/command_gate/session")).expect("seed");
+    let s = leak_monitor_fuzz::command_gate::run_counting(&data);
+    println!("{s:?}");
+    assert!(s.accepted >= 2 && s.rejected >= 4, "{s:?}");
+}
