@@ -101,4 +101,7 @@ cargo qemu-test
 step "QEMU: instructions per Monitor::step, static RAM, stack (budget)"
 cargo qemu-bench
 
+step "fuzz targets: each for 30 s on nightly (cargo-fuzz), or their corpora replayed on stable"
+scripts/fuzz.sh
+
 step "all checks passed"
