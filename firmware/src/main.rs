@@ -123,6 +123,7 @@ fn start(spawner: Spawner) {
         boot.reset_cause
     );
     let mut device_faults = DeviceFaults::NONE;
+    stm32::system::enable_clock_security();
     let bor = stm32::system::ensure_brownout_level();
     defmt::info!("brown-out reset level: {}", bor);
     if bor < brownout::REQUIRED {

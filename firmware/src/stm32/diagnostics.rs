@@ -2,7 +2,8 @@
 //! of `monitor::device::diagnostics` (which holds the logic, tested on the
 //! host). Here: the RAM test before the statics are initialised, the
 //! program image's checksum against the seal written by
-//! `scripts/seal-image.py`, and the background re-check of the image.
+//! `scripts/seal-image.py`, the background re-check of the image, and the
+//! clock security system's verdict (`system::clock_failed`).
 //!
 //! The installation parameters are compiled into the image, so the image
 //! checksum covers them too.
@@ -188,8 +189,12 @@ impl ImageCheck {
 }
 
 impl SelfTest for ImageCheck {
-    /// One background step of the image check.
+    /// A clock failure (reported by the clock security system), else one
+    /// background step of the image check.
     fn step(&mut self) -> Option<DeviceFault> {
+        if super::system::clock_failed() {
+            return Some(DeviceFault::Clock);
+        }
         let (offset, n) = self.scan.next_chunk(Self::CHUNK);
         let mut buf = [0u8; Self::CHUNK];
         read_image(offset, &mut buf[..n]);

@@ -2,6 +2,8 @@
 //! independent watchdog, status LED, and the fault handler that
 //! de-energises the relay.
 
+use core::sync::atomic::{AtomicBool, Ordering};
+
 use embassy_stm32::gpio::{Level, Output, Speed};
 use embassy_stm32::pac;
 use embassy_stm32::peripherals::{IWDG, PC12, RNG};
@@ -147,6 +149,33 @@ impl Led {
 impl StatusLed for Led {
     fn set(&mut self, on: bool) {
         self.0.set_level(if on { Level::High } else { Level::Low });
+    }
+}
+
+/// Set by the NMI when the clock security system tripped.
+static CLOCK_FAILED: AtomicBool = AtomicBool::new(false);
+
+/// Switch the clock security system on: if the crystal stops, the chip
+/// switches the core to its 16 MHz RC oscillator (every period of the
+/// sample clock then lasts 10.5 times as long) and raises the NMI, which
+/// drops the relay; the supervisor then reports a clock device fault.
+pub fn enable_clock_security() {
+    pac::RCC.cr().modify(|w| w.set_csson(true));
+}
+
+/// Has the clock security system tripped since boot?
+pub fn clock_failed() -> bool {
+    CLOCK_FAILED.load(Ordering::Relaxed)
+}
+
+/// The NMI: on the STM32F405 only the clock security system raises it.
+/// Relay off at once; the flag tells the supervisor.
+#[cortex_m_rt::exception]
+unsafe fn NonMaskableInt() {
+    super::relay::force_off();
+    if pac::RCC.cir().read().cssf() {
+        CLOCK_FAILED.store(true, Ordering::Relaxed);
+        pac::RCC.cir().modify(|w| w.set_cssc(true));
     }
 }
 
