@@ -183,6 +183,9 @@ impl<T: Real> Monitor<T> {
 
     /// Process one sample.
     pub fn step(&mut self, sample: &Sample) -> Status {
+        // Sample time in ms for the decision layer's timers: converted once
+        // (f64 is soft-float on the Cortex-M4F).
+        let t_ms = sample_ms(sample.t_s);
         let mut events = Events::new();
         let mut flags = 0u16;
         // Time step: a non-increasing time is ignored, a gap restarts.
@@ -204,7 +207,7 @@ impl<T: Real> Monitor<T> {
         }
         let Some(dt) = dt else {
             flags |= health::TIME_NOT_INCREASING;
-            return self.status(sample.t_s, checked.faulted, flags, events);
+            return self.status(sample.t_s, t_ms, checked.faulted, flags, events);
         };
         self.last_t = Some(sample.t_s);
         if dt > self.cfg.gap_s && self.bank.is_some() {
@@ -223,6 +226,7 @@ impl<T: Real> Monitor<T> {
             self.checker.break_pressure_sequence();
             return self.status(
                 sample.t_s,
+                t_ms,
                 checked.faulted,
                 flags | health::SENSOR_FAULT,
                 events,
@@ -252,6 +256,7 @@ impl<T: Real> Monitor<T> {
             self.matching.restart();
             return self.status(
                 sample.t_s,
+                t_ms,
                 checked.faulted,
                 flags | health::WARMING_UP,
                 events,
@@ -334,10 +339,10 @@ impl<T: Real> Monitor<T> {
             self.quiet.weight(),
             !warming && !suspect && flags & health::FILTER_RESET == 0,
             region,
-            sample_ms(sample.t_s),
+            t_ms,
             &mut events,
         );
-        self.status(sample.t_s, checked.faulted, flags, events)
+        self.status(sample.t_s, t_ms, checked.faulted, flags, events)
     }
 
     fn update_temperature(&mut self, temp: Option<f32>) {
@@ -371,7 +376,14 @@ impl<T: Real> Monitor<T> {
         }
     }
 
-    fn status(&mut self, t_s: f64, faulted: u8, mut flags: u16, events: Events) -> Status {
+    fn status(
+        &mut self,
+        t_s: f64,
+        t_ms: u64,
+        faulted: u8,
+        mut flags: u16,
+        events: Events,
+    ) -> Status {
         if faulted != 0 {
             flags |= health::SENSOR_FAULT;
         }
@@ -402,7 +414,7 @@ impl<T: Real> Monitor<T> {
         // for the evidence period of conclusive healthy verdicts.
         let held = self
             .decision
-            .ack_evidence(sample_ms(t_s), verdict == Verdict::Healthy);
+            .ack_evidence(t_ms, verdict == Verdict::Healthy);
         if held {
             flags |= health::ACK_EVIDENCE;
             if verdict == Verdict::Healthy {
@@ -480,7 +492,8 @@ impl<'a, T: Real> FilterState<'a, T> {
 /// as 0; the policy only compares differences).
 fn sample_ms(t_s: f64) -> u64 {
     if t_s > 0.0 {
-        libm::round(t_s * 1000.0) as u64
+        // Rounded to the nearest ms (t_s > 0); cheaper than libm::round.
+        (t_s * 1000.0 + 0.5) as u64
     } else {
         0
     }
