@@ -8,8 +8,8 @@ use core::sync::atomic::Ordering;
 
 use embassy_time::{Duration, Instant, Ticker};
 use monitor::device::alarm::AlarmState;
-use monitor::device::diagnostics::flow::{Checkpoint, Flow, FlowMonitor};
-use monitor::device::diagnostics::relay::{ReadbackConfig, RelayReadback};
+use monitor::device::diagnostics::check::{CheckInputs, SupervisorChecks};
+use monitor::device::diagnostics::flow::Checkpoint;
 use monitor::device::diagnostics::DeviceFault;
 use monitor::device::estimator::stall;
 use monitor::device::supervisor::{Supervision, Supervisor, SupervisorConfig};
@@ -67,43 +67,34 @@ fn log_event(e: LogEvent) {
     }
 }
 
-/// The device diagnostics of one check: the board's self-test step, the
-/// relay read-back and the program-flow checkpoints. A fault is latched
-/// in `shared` (the estimator shows it from its next block) and drops the
-/// relay at once. Returns false when a checkpoint was missed.
+/// The device diagnostics of one check (the rule is
+/// `monitor::device::diagnostics::check`): read the inputs, latch what is
+/// found in `shared` (the estimator shows it from its next block) and drop
+/// the relay at once. Returns false when a checkpoint was missed.
 fn diagnose<R: RelayOutput, S: SelfTest>(
+    checks: &mut SupervisorChecks<2>,
     self_test: &mut S,
-    readback: &mut RelayReadback,
-    flow: &mut FlowMonitor<2>,
     relay: &R,
     shared: &Shared,
     started: bool,
 ) -> bool {
-    let raise = |f: DeviceFault| {
-        relay.set_energised(false);
-        if shared.raise_device_fault(f) {
-            defmt::error!("device fault: {}: relay off until reset", f.name());
-        }
-    };
-    if let Some(f) = self_test.step() {
-        raise(f);
-    }
-    if readback.check(relay.commanded(), relay.read_back()) {
-        raise(DeviceFault::RelayReadback);
-    }
-    let checkpoints = shared.take_checkpoints();
-    // Before the first sample the supervisor's start-up grace applies;
-    // after a stall the stall is the reaction (its checkpoint stays unmet).
-    if !started || shared.stalled.load(Ordering::Acquire) {
-        return true;
-    }
-    match flow.check(checkpoints) {
-        Flow::Ok => true,
-        Flow::Missed(_) => {
-            raise(DeviceFault::ProgramFlow);
-            false
+    let out = checks.check(&CheckInputs {
+        self_test: self_test.step(),
+        relay_commanded: relay.commanded(),
+        relay_read_back: relay.read_back(),
+        checkpoints: shared.take_checkpoints(),
+        started,
+        stalled: shared.stalled.load(Ordering::Acquire),
+    });
+    for f in DeviceFault::ALL {
+        if out.found.contains(f) {
+            relay.set_energised(false);
+            if shared.raise_device_fault(f) {
+                defmt::error!("device fault: {}: relay off until reset", f.name());
+            }
         }
     }
+    out.flow_kept
 }
 
 /// Run the supervisor for ever.
@@ -115,8 +106,7 @@ pub async fn run<W: Watchdog, R: RelayOutput, L: StatusLed, S: SelfTest>(
     shared: &Shared,
 ) -> ! {
     let mut supervisor = Supervisor::new(SupervisorConfig::DEFAULT);
-    let mut readback = RelayReadback::new(ReadbackConfig::DEFAULT);
-    let mut flow = FlowMonitor::new([ESTIMATOR, CAN_TX]);
+    let mut diagnostics = SupervisorChecks::new([ESTIMATOR, CAN_TX]);
     let mut ticker = Ticker::every(CHECK_PERIOD);
     let mut checks = 0u32;
     loop {
@@ -125,14 +115,7 @@ pub async fn run<W: Watchdog, R: RelayOutput, L: StatusLed, S: SelfTest>(
         let processed = shared.processed.load(Ordering::Acquire);
         let missed = shared.missed.load(Ordering::Acquire);
         let started = processed != 0 || missed != 0;
-        let flow_kept = diagnose(
-            &mut self_test,
-            &mut readback,
-            &mut flow,
-            relay,
-            shared,
-            started,
-        );
+        let flow_kept = diagnose(&mut diagnostics, &mut self_test, relay, shared, started);
         match supervisor.check(processed, missed) {
             // A task that missed its checkpoint withholds the watchdog too.
             Supervision::Feed if flow_kept => watchdog.feed(),

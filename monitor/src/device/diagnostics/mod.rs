@@ -10,6 +10,7 @@
 //! readings in and acts on the result.
 
 pub mod brownout;
+pub mod check;
 pub mod clock;
 pub mod flash;
 pub mod flow;
