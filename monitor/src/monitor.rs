@@ -168,7 +168,7 @@ impl<T: Real> Monitor<T> {
     /// has concluded healthy for `acknowledge::EVIDENCE_MS`
     /// (`health::ACK_EVIDENCE` meanwhile).
     pub fn acknowledge(&mut self) -> AckOutcome {
-        let t_ms = self.last_t.map_or(0, sample_ms);
+        let t_ms = self.last_t.map_or(0, crate::acknowledge::sample_ms);
         self.decision.acknowledge(t_ms)
     }
 
@@ -183,9 +183,6 @@ impl<T: Real> Monitor<T> {
 
     /// Process one sample.
     pub fn step(&mut self, sample: &Sample) -> Status {
-        // Sample time in ms for the decision layer's timers: converted once
-        // (f64 is soft-float on the Cortex-M4F).
-        let t_ms = sample_ms(sample.t_s);
         let mut events = Events::new();
         let mut flags = 0u16;
         // Time step: a non-increasing time is ignored, a gap restarts.
@@ -207,7 +204,7 @@ impl<T: Real> Monitor<T> {
         }
         let Some(dt) = dt else {
             flags |= health::TIME_NOT_INCREASING;
-            return self.status(sample.t_s, t_ms, checked.faulted, flags, events);
+            return self.status(sample.t_s, checked.faulted, flags, events);
         };
         self.last_t = Some(sample.t_s);
         if dt > self.cfg.gap_s && self.bank.is_some() {
@@ -226,7 +223,6 @@ impl<T: Real> Monitor<T> {
             self.checker.break_pressure_sequence();
             return self.status(
                 sample.t_s,
-                t_ms,
                 checked.faulted,
                 flags | health::SENSOR_FAULT,
                 events,
@@ -256,7 +252,6 @@ impl<T: Real> Monitor<T> {
             self.matching.restart();
             return self.status(
                 sample.t_s,
-                t_ms,
                 checked.faulted,
                 flags | health::WARMING_UP,
                 events,
@@ -339,10 +334,10 @@ impl<T: Real> Monitor<T> {
             self.quiet.weight(),
             !warming && !suspect && flags & health::FILTER_RESET == 0,
             region,
-            t_ms,
+            sample.t_s,
             &mut events,
         );
-        self.status(sample.t_s, t_ms, checked.faulted, flags, events)
+        self.status(sample.t_s, checked.faulted, flags, events)
     }
 
     fn update_temperature(&mut self, temp: Option<f32>) {
@@ -376,14 +371,7 @@ impl<T: Real> Monitor<T> {
         }
     }
 
-    fn status(
-        &mut self,
-        t_s: f64,
-        t_ms: u64,
-        faulted: u8,
-        mut flags: u16,
-        events: Events,
-    ) -> Status {
+    fn status(&mut self, t_s: f64, faulted: u8, mut flags: u16, events: Events) -> Status {
         if faulted != 0 {
             flags |= health::SENSOR_FAULT;
         }
@@ -412,9 +400,7 @@ impl<T: Real> Monitor<T> {
         };
         // After an accepted acknowledge, `healthy` (and the relay) waits
         // for the evidence period of conclusive healthy verdicts.
-        let held = self
-            .decision
-            .ack_evidence(t_ms, verdict == Verdict::Healthy);
+        let held = self.decision.ack_evidence(t_s, verdict == Verdict::Healthy);
         if held {
             flags |= health::ACK_EVIDENCE;
             if verdict == Verdict::Healthy {
@@ -485,17 +471,6 @@ impl<'a, T: Real> FilterState<'a, T> {
             leak_internal: internal_index(f.hypothesis).map(|i| f.ekf.x[i]),
             leak_external: external_index(f.hypothesis).map(|i| f.ekf.x[i]),
         }
-    }
-}
-
-/// A sample time as ms for the acknowledge policy (times before 0 count
-/// as 0; the policy only compares differences).
-fn sample_ms(t_s: f64) -> u64 {
-    if t_s > 0.0 {
-        // Rounded to the nearest ms (t_s > 0); cheaper than libm::round.
-        (t_s * 1000.0 + 0.5) as u64
-    } else {
-        0
     }
 }
 

@@ -332,9 +332,63 @@ impl AckPolicy {
     }
 }
 
+/// A sample time (s) as ms on the sample clock for the policy's timers,
+/// rounded to the nearest ms (half up). Times at or before 0, and NaN,
+/// count as 0; times from 2⁵² s on saturate (the policy only compares
+/// differences).
+///
+/// Integer arithmetic on the f64's bits: on the Cortex-M4F f64 is
+/// soft-float, and `(t_s * 1000.0 + 0.5) as u64` cost ≈ 425 instructions
+/// on the step that raises an alarm (the worst step of the benchmark);
+/// this costs a few dozen.
+pub fn sample_ms(t_s: f64) -> u64 {
+    const MANTISSA_BITS: u32 = 52;
+    if !(t_s > 0.0) {
+        return 0;
+    }
+    let bits = t_s.to_bits();
+    let biased = ((bits >> MANTISSA_BITS) & 0x7ff) as i32;
+    let fraction = bits & ((1 << MANTISSA_BITS) - 1);
+    // t_s = mantissa · 2^exp exactly (subnormals have no implicit bit).
+    let (mantissa, exp) = if biased == 0 {
+        (fraction, -1074)
+    } else {
+        (fraction | 1 << MANTISSA_BITS, biased - 1075)
+    };
+    if exp >= 0 {
+        return u64::MAX;
+    }
+    // < 2⁵³ · 1000 < 2⁶³: no overflow.
+    let ms_scaled = mantissa * 1000;
+    let shift = exp.unsigned_abs();
+    if shift >= 64 {
+        return 0;
+    }
+    (ms_scaled >> shift) + ((ms_scaled >> (shift - 1)) & 1)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn sample_ms_rounds_to_the_nearest_ms() {
+        for n in (0..20_000_000u64).step_by(997) {
+            let t = n as f64 / 1000.0;
+            assert_eq!(sample_ms(t), n, "{t}");
+            assert_eq!(sample_ms(t + 0.000_25), n, "{t} + 0.25 ms");
+            assert_eq!(sample_ms(t + 0.000_75), n + 1, "{t} + 0.75 ms");
+        }
+        assert_eq!(sample_ms(0.0005), 1, "half up");
+        assert_eq!(sample_ms(0.000_499), 0);
+        for t in [0.0, -0.0, -1.0, f64::NAN, f64::NEG_INFINITY, 1e-320, 1e-30] {
+            assert_eq!(sample_ms(t), 0, "{t}");
+        }
+        assert_eq!(sample_ms(f64::INFINITY), u64::MAX);
+        assert_eq!(sample_ms(1e17), u64::MAX);
+        // A long time on the 1 ms grid: 100 days.
+        assert_eq!(sample_ms(8_640_000.001), 8_640_000_001);
+    }
 
     fn rejected(r: AckRejected) -> AckResult {
         AckResult::Rejected(r)

@@ -17,7 +17,7 @@
 //! Whether the request came from an authentic source is checked before
 //! (`protocol::gate`).
 
-use super::acknowledge::{AckPolicy, AckRejected, AckResult, AckTiming};
+use super::acknowledge::{sample_ms, AckPolicy, AckRejected, AckResult, AckTiming};
 use crate::leak::LeakSet;
 
 /// What became of an acknowledge request.
@@ -71,14 +71,14 @@ impl Latch {
         self.latched
     }
 
-    /// Leaks `found` by the evidence at `t_ms`: latched with those already
-    /// latched. Returns the latched set when it grew (an alarm raised or
-    /// escalated: the acknowledge hold-off starts again).
-    pub fn raise(&mut self, found: LeakSet, t_ms: u64) -> Option<LeakSet> {
+    /// Leaks `found` by the evidence at sample time `t_s` (s): latched with
+    /// those already latched. Returns the latched set when it grew (an
+    /// alarm raised or escalated: the acknowledge hold-off starts again).
+    pub fn raise(&mut self, found: LeakSet, t_s: f64) -> Option<LeakSet> {
         let merged = self.latched.union(found);
         (merged != self.latched).then(|| {
             self.latched = merged;
-            self.policy.raised(t_ms);
+            self.policy.raised(sample_ms(t_s));
             merged
         })
     }
@@ -93,10 +93,16 @@ impl Latch {
         }
     }
 
-    /// The verdict at `t_ms` was a conclusive healthy one (`healthy`) or
-    /// not: counts towards an accepted acknowledge's evidence period.
-    pub fn verdict(&mut self, t_ms: u64, healthy: bool) {
-        self.policy.verdict(t_ms, healthy);
+    /// The verdict at sample time `t_s` (s) was a conclusive healthy one
+    /// (`healthy`) or not: counts towards an accepted acknowledge's
+    /// evidence period.
+    pub fn verdict(&mut self, t_s: f64, healthy: bool) {
+        // Outside an evidence period there is nothing to count: the time is
+        // converted to ms only inside one (f64 is soft-float on the M4F,
+        // and this runs every sample).
+        if !self.policy.relay_permitted() {
+            self.policy.verdict(sample_ms(t_s), healthy);
+        }
     }
 
     /// May the relay be energised as far as acknowledgement goes? False
@@ -113,15 +119,15 @@ mod tests {
     #[test]
     fn latch_raises_escalates_and_ignores_what_it_holds() {
         let mut l = Latch::new();
-        assert_eq!(l.raise(LeakSet::NONE, 0), None);
-        assert_eq!(l.raise(LeakSet::INTERNAL, 0), Some(LeakSet::INTERNAL));
-        assert_eq!(l.raise(LeakSet::INTERNAL, 0), None, "already latched");
+        assert_eq!(l.raise(LeakSet::NONE, 0.0), None);
+        assert_eq!(l.raise(LeakSet::INTERNAL, 0.0), Some(LeakSet::INTERNAL));
+        assert_eq!(l.raise(LeakSet::INTERNAL, 0.0), None, "already latched");
         assert_eq!(
-            l.raise(LeakSet::EXTERNAL, 0),
+            l.raise(LeakSet::EXTERNAL, 0.0),
             Some(LeakSet::BOTH),
             "escalates"
         );
-        assert_eq!(l.raise(LeakSet::INTERNAL, 0), None, "never de-escalates");
+        assert_eq!(l.raise(LeakSet::INTERNAL, 0.0), None, "never de-escalates");
         assert_eq!(l.latched(), LeakSet::BOTH);
     }
 
@@ -133,7 +139,7 @@ mod tests {
             l.acknowledge(0),
             AckOutcome::Refused(AckRejected::NothingLatched)
         );
-        l.raise(LeakSet::EXTERNAL, 1_000);
+        l.raise(LeakSet::EXTERNAL, 1.0);
         let early = l.acknowledge(1_000 + HOLD_OFF_MS - 1);
         assert_eq!(early, AckOutcome::Refused(AckRejected::HoldOff));
         assert!(!early.cleared_a_leak());
@@ -146,11 +152,11 @@ mod tests {
         assert!(!l.relay_permitted());
         let t0 = 1_000 + HOLD_OFF_MS + 1;
         for t in t0..=t0 + EVIDENCE_MS {
-            l.verdict(t, true);
+            l.verdict(t as f64 / 1000.0, true);
         }
         assert!(l.relay_permitted());
         assert_eq!(
-            l.raise(LeakSet::EXTERNAL, t0 + EVIDENCE_MS),
+            l.raise(LeakSet::EXTERNAL, (t0 + EVIDENCE_MS) as f64 / 1000.0),
             Some(LeakSet::EXTERNAL),
             "raised anew"
         );

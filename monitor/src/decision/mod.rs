@@ -248,16 +248,17 @@ impl<T: Real> Decision<T> {
         self.latch = Latch::with_timing(timing);
     }
 
-    /// The verdict at `t_ms` was a conclusive healthy one or not (for an
-    /// accepted acknowledge's evidence period). Returns whether the relay
-    /// is held off by that period ([`Latch::relay_permitted`]).
-    pub fn ack_evidence(&mut self, t_ms: u64, healthy: bool) -> bool {
-        self.latch.verdict(t_ms, healthy);
+    /// The verdict at sample time `t_s` (s) was a conclusive healthy one
+    /// or not (for an accepted acknowledge's evidence period). Returns
+    /// whether the relay is held off by that period
+    /// ([`Latch::relay_permitted`]).
+    pub fn ack_evidence(&mut self, t_s: f64, healthy: bool) -> bool {
+        self.latch.verdict(t_s, healthy);
         !self.latch.relay_permitted()
     }
 
     /// Take one sample's filter outputs (`None`: that filter was reset)
-    /// at sample time `t_ms`.
+    /// at sample time `t_s` (s).
     /// `valid`: the sample counts as evidence. `region`: the operating
     /// region (0 retracting, 1 holding, 2 extending) for the baseline.
     /// Returns `health::EVIDENCE_PAUSED` when it did not count (or counted
@@ -272,7 +273,7 @@ impl<T: Real> Decision<T> {
         weight: T,
         valid: bool,
         region: usize,
-        t_ms: u64,
+        t_s: f64,
         events: &mut Events,
     ) -> u16 {
         if out.iter().any(Option::is_none) {
@@ -340,7 +341,7 @@ impl<T: Real> Decision<T> {
             }
         }
         if new_leak {
-            if let Some(latched) = self.latch.raise(self.raised.set(), t_ms) {
+            if let Some(latched) = self.latch.raise(self.raised.set(), t_s) {
                 let _ = events.push(Event::AlarmRaised(Verdict::of_leaks(latched)));
             }
         }
