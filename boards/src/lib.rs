@@ -11,6 +11,8 @@
 #![no_std]
 #![deny(missing_docs)]
 
+pub mod timer;
+
 #[cfg(feature = "h405")]
 pub mod h405;
 

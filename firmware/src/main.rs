@@ -11,6 +11,7 @@
 mod stm32;
 
 use defmt::unwrap;
+use defmt_rtt as _;
 use embassy_executor::{Executor, InterruptExecutor, Spawner};
 use embassy_stm32::interrupt;
 use embassy_stm32::interrupt::{InterruptExt, Priority};
@@ -30,7 +31,6 @@ use stm32::diagnostics::ImageCheck;
 use stm32::pins::{self, Board};
 use stm32::relay::Relay;
 use stm32::system::{Dwt, Iwdg, Led};
-use {defmt_rtt as _, panic_probe as _};
 
 /// The installation's parameters, compiled in by `build.rs` from the TOML
 /// file named by `LEAK_MONITOR_PARAMS` (or the reference rig's).

@@ -16,14 +16,15 @@ use embassy_stm32::dma::{self, ReadableRingBuffer, TransferOptions};
 use embassy_stm32::pac;
 use embassy_stm32::pac::adc::vals::{Dds, Eocs};
 use embassy_stm32::peripherals::{ADC1, DMA2_CH0, TIM3};
-use embassy_stm32::time::Hertz;
-use embassy_stm32::timer::low_level::{MasterMode, RoundTo, Timer};
+use embassy_stm32::rcc::frequency;
+use embassy_stm32::timer::low_level::{MasterMode, Timer};
 use embassy_stm32::{bind_interrupts, peripherals, triggers, Peri};
 use firmware::board::{Overrun, SampleSource};
 use monitor::signal::frontend::CHANNELS;
 use static_cell::StaticCell;
 
 use super::pins::ADC_SAMPLE_TIME;
+use boards::timer::timer_period;
 use firmware::board_map::{BLOCK_LEN, SCAN_RATE_HZ};
 
 bind_interrupts!(struct Irqs {
@@ -114,7 +115,12 @@ impl AdcSampler {
         ring.start();
 
         let trigger = Timer::new(trigger);
-        trigger.set_frequency(Hertz(SCAN_RATE_HZ), RoundTo::Faster);
+        let Some((psc, arr)) = timer_period(frequency::<TIM3>().0, SCAN_RATE_HZ) else {
+            defmt::panic!("ADC: TIM3 cannot trigger at {=u32} Hz", SCAN_RATE_HZ);
+        };
+        let regs = trigger.regs_gp16();
+        regs.psc().write_value(psc);
+        regs.arr().write(|w| w.set_arr(arr));
         trigger.set_master_mode(MasterMode::UPDATE);
         trigger.generate_update_event();
         trigger.start();

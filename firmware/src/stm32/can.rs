@@ -4,11 +4,13 @@
 //! until the application's timeout aborts it.
 
 use embassy_stm32::can::filter::Mask32;
+use embassy_stm32::can::util::calc_can_timings;
 use embassy_stm32::can::{
     Can, CanRx, CanTx, Fifo, Frame, Id, Mailbox, Rx0InterruptHandler, Rx1InterruptHandler,
     SceInterruptHandler, StandardId, TxInterruptHandler,
 };
 use embassy_stm32::peripherals::{CAN1, PB8, PB9};
+use embassy_stm32::rcc::frequency;
 use embassy_stm32::{bind_interrupts, Peri};
 use embassy_time::{with_timeout, Duration};
 use monitor::protocol::{CanFrame, MessageKind, BITRATE_BPS};
@@ -39,7 +41,14 @@ pub async fn start(
         Fifo::Fifo0,
         Mask32::frames_with_std_id(command, StandardId::MAX),
     );
-    can.modify_config().set_bitrate(BITRATE_BPS);
+    // The timing computed here rather than by `set_bitrate`, whose
+    // `unwrap` links the whole `core::fmt` machinery (≈ 5 KB) for its
+    // error's `Debug`.
+    let timing = match calc_can_timings(frequency::<CAN1>(), BITRATE_BPS) {
+        Ok(t) => t,
+        Err(_) => defmt::panic!("CAN: no bit timing for {=u32} bit/s", BITRATE_BPS),
+    };
+    can.modify_config().set_bit_timing(timing);
     // Joining needs 11 recessive bits: a missing transceiver or a bus held
     // dominant keeps CAN (only CAN) waiting here.
     if with_timeout(Duration::from_secs(1), can.enable())

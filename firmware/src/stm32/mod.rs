@@ -4,6 +4,7 @@ pub mod adc;
 pub mod can;
 pub mod clocks;
 pub mod diagnostics;
+mod panic;
 pub mod pins;
 pub mod relay;
 pub mod system;

@@ -179,7 +179,7 @@ unsafe fn NonMaskableInt() {
     }
 }
 
-/// Hard fault (a panic ends here too, through panic-probe's `udf`):
+/// Hard fault (a panic ends here too, through `panic.rs`'s `udf`):
 /// de-energise the relay at once, then reset (the heartbeat then reports a
 /// software reset). Only a debug build with a debugger attached stops for
 /// it: the debug-enable bit stays set after a probe is unplugged, and a
