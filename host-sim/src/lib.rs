@@ -36,14 +36,51 @@ pub fn load_params_or_nominal(path: Option<&Path>) -> anyhow::Result<Params> {
     path.map_or_else(|| Ok(Params::nominal()), load_params)
 }
 
+/// Largest parameter file read, bytes (a real one is a few KB).
+pub const MAX_PARAMS_BYTES: u64 = 1 << 20;
+
 /// Load installation parameters from a TOML file (only the fields it sets
-/// change from nominal), validated.
+/// change from nominal), validated; `-` reads them from standard input.
+/// At most [`MAX_PARAMS_BYTES`] are read.
 pub fn load_params(path: &Path) -> anyhow::Result<Params> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| anyhow::anyhow!("{}: cannot read: {e}", path.display()))?;
-    let p: Params =
-        toml::from_str(&text).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
-    p.validate()
-        .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    use std::io::Read;
+    let stdin = path.as_os_str() == "-";
+    let name = if stdin {
+        "standard input".to_string()
+    } else {
+        path.display().to_string()
+    };
+    let source: Box<dyn Read> = if stdin {
+        Box::new(std::io::stdin().lock())
+    } else {
+        Box::new(
+            std::fs::File::open(path).map_err(|e| anyhow::anyhow!("{name}: cannot read: {e}"))?,
+        )
+    };
+    let mut text = String::new();
+    source
+        .take(MAX_PARAMS_BYTES + 1)
+        .read_to_string(&mut text)
+        .map_err(|e| anyhow::anyhow!("{name}: cannot read: {e}"))?;
+    anyhow::ensure!(
+        text.len() as u64 <= MAX_PARAMS_BYTES,
+        "{name}: more than {MAX_PARAMS_BYTES} bytes: not a parameter file"
+    );
+    let p: Params = toml::from_str(&text).map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
+    p.validate().map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
     Ok(p)
+}
+
+/// Standard input can feed one thing: refuse `--params -` together with a
+/// recording read from `-`.
+pub fn stdin_used_once<'a>(
+    params: Option<&Path>,
+    inputs: impl IntoIterator<Item = &'a Path>,
+) -> anyhow::Result<()> {
+    let dash = |p: &Path| p.as_os_str() == "-";
+    anyhow::ensure!(
+        !(params.is_some_and(dash) && inputs.into_iter().any(dash)),
+        "standard input cannot hold both the parameters (--params -) and a recording (-)"
+    );
+    Ok(())
 }

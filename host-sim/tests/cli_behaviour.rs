@@ -150,6 +150,56 @@ fn dash_is_standard_input_for_replay_calibrate_and_plot() {
 }
 
 #[test]
+fn dash_is_standard_input_for_params_too() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = write(dir.path(), "rest.csv", &rest_body(2));
+    // A field the monitor uses: a warm-up longer than the recording keeps
+    // the verdict inconclusive, so the file from stdin was really read.
+    let params = "[filter]\nwarm_up_s = 5.0\n";
+    let out = host_sim_stdin(
+        &["replay", "--params", "-", s(&rec), "--json"],
+        params.as_bytes(),
+    );
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["verdict"], "inconclusive", "{v}");
+
+    // Validated like a file, and named as standard input.
+    let out = host_sim_stdin(
+        &["replay", "--params", "-", s(&rec)],
+        b"[filter]\nwarm_up_s = -1.0\n",
+    );
+    let err = text(&out.stderr);
+    assert!(
+        !out.status.success() && err.contains("standard input") && err.contains("warm_up_s"),
+        "{err}"
+    );
+
+    // Bounded.
+    let huge = vec![b'#'; 2 << 20];
+    let out = host_sim_stdin(&["replay", "--params", "-", s(&rec)], &huge);
+    let err = text(&out.stderr);
+    assert!(
+        !out.status.success() && err.contains("not a parameter file"),
+        "{err}"
+    );
+
+    // Standard input cannot be both.
+    for args in [
+        &["replay", "--params", "-", "-"][..],
+        &["calibrate", "--params", "-", "-", "-o", "x.toml"][..],
+        &["plot", "--params", "-", "-"][..],
+    ] {
+        let out = host_sim_stdin(args, params.as_bytes());
+        let err = text(&out.stderr);
+        assert!(
+            !out.status.success() && err.contains("cannot hold both"),
+            "{args:?}: {err}"
+        );
+    }
+}
+
+#[test]
 fn decode_prints_each_frame_as_it_arrives() {
     let mut child = Command::new(BIN)
         .args(["decode", "-"])

@@ -15,12 +15,14 @@ pub struct Args {
     /// Where to write the parameters (TOML).
     #[arg(short, long)]
     output: PathBuf,
-    /// Start from these parameters instead of the reference rig's.
+    /// Start from these parameters instead of the reference rig's (`-`
+    /// reads standard input).
     #[arg(long)]
     params: Option<PathBuf>,
 }
 
 pub fn run(a: Args) -> Result<ExitCode> {
+    host_sim::stdin_used_once(a.params.as_deref(), [a.recording.as_path()])?;
     let mut start = host_sim::load_params_or_nominal(a.params.as_deref())?;
     let (samples, period) = host_sim::read_all(&a.recording)?;
     // Calibrate at the recording's own rate, as `replay` runs it.

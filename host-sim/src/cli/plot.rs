@@ -16,12 +16,14 @@ pub struct Args {
     /// current directory].
     #[arg(short, long)]
     output: Option<PathBuf>,
-    /// Installation parameters (TOML, e.g. from `calibrate`).
+    /// Installation parameters (TOML, e.g. from `calibrate`; `-` reads
+    /// standard input).
     #[arg(long)]
     params: Option<PathBuf>,
 }
 
 pub fn run(a: Args) -> Result<ExitCode> {
+    host_sim::stdin_used_once(a.params.as_deref(), [a.recording.as_path()])?;
     let params = host_sim::load_params_or_nominal(a.params.as_deref())?;
     let output = a.output.unwrap_or_else(|| default_plot_path(&a.recording));
     let reader = RecordingReader::open(&a.recording)?;

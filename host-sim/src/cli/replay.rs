@@ -17,7 +17,8 @@ pub struct Args {
     /// status is then 2. Limits: lines of 64 KiB, 16 GiB of text.
     #[arg(required = true)]
     recordings: Vec<PathBuf>,
-    /// Installation parameters (TOML, e.g. from `calibrate`).
+    /// Installation parameters (TOML, e.g. from `calibrate`; `-` reads
+    /// standard input).
     #[arg(long)]
     params: Option<PathBuf>,
     /// Print exactly one JSON object per recording (`docs/cli.md`).
@@ -35,6 +36,10 @@ pub struct Args {
 }
 
 pub fn run(a: Args) -> Result<ExitCode> {
+    host_sim::stdin_used_once(
+        a.params.as_deref(),
+        a.recordings.iter().map(PathBuf::as_path),
+    )?;
     let params = host_sim::load_params_or_nominal(a.params.as_deref())?;
     anyhow::ensure!(
         a.trace.is_none() || a.recordings.len() == 1,
