@@ -110,9 +110,10 @@ impl Frontend {
     }
 
     /// Convert one sample's averaged codes (in [`Channel::ALL`] order),
-    /// taken at `t_s`. Prefer [`Self::convert_scans`], which also checks
-    /// each scan.
-    pub fn convert(&mut self, t_s: f64, counts: &[f32; CHANNELS]) -> Acquired {
+    /// taken at `t_s`, without the per-scan check of
+    /// [`Self::convert_scans`] (the device always has the scans): tests.
+    #[cfg(test)]
+    pub(crate) fn convert(&mut self, t_s: f64, counts: &[f32; CHANNELS]) -> Acquired {
         self.convert_checked(t_s, counts, [None; CHANNELS])
     }
 
