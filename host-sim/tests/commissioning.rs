@@ -42,20 +42,19 @@ fn samples(path: &str) -> Vec<monitor::Sample> {
         .unwrap()
 }
 
+/// `host-sim record PORT -o OUT --duration S`; its stderr.
+fn record(port: &str, out: &std::path::Path, seconds: &str) -> String {
+    let out = out.to_str().unwrap();
+    ok(&["record", port, "-o", out, "--duration", seconds]).1
+}
+
 #[test]
 fn record_equals_what_the_device_streamed() {
     let dir = tempfile::tempdir().unwrap();
     let input = simulate(dir.path(), "2");
     let out = dir.path().join("site.csv.gz");
     let port = format!("sim:{input}");
-    let (_, err) = ok(&[
-        "record",
-        &port,
-        "-o",
-        out.to_str().unwrap(),
-        "--duration",
-        "2",
-    ]);
+    let err = record(&port, &out, "2");
     assert!(err.contains("lost blocks: 0 of 200"), "{err}");
     let got = samples(out.to_str().unwrap());
     let want = samples(&input);
@@ -80,14 +79,7 @@ fn record_reports_every_lost_block() {
     // Every 7th block dropped at the device (slow host), every 11th
     // corrupted on the wire: of 300 blocks, 42 + (27 − 3) = 66 lost.
     let port = format!("sim:{input}?drop=7&corrupt=11");
-    let (_, err) = ok(&[
-        "record",
-        &port,
-        "-o",
-        out.to_str().unwrap(),
-        "--duration",
-        "3",
-    ]);
+    let err = record(&port, &out, "3");
     assert!(
         err.contains(
             "lost blocks: 66 of 300 (42 dropped by the device, 24 damaged frames on the link)"
@@ -242,14 +234,7 @@ fn record_and_upload_over_a_serial_port() {
         }
     });
     let out = dir.path().join("pty.csv");
-    let (_, err) = ok(&[
-        "record",
-        &path,
-        "-o",
-        out.to_str().unwrap(),
-        "--duration",
-        "1",
-    ]);
+    let err = record(&path, &out, "1");
     assert!(err.contains("lost blocks: 0 of 100"), "{err}");
     assert!(err.contains("firmware 9.9.9 serial PTY-7"), "{err}");
     assert_eq!(samples(out.to_str().unwrap()), samples(&input));
