@@ -45,13 +45,7 @@ impl<'a> Expected<'a> {
     /// Parse `bytes`.
     pub fn parse(bytes: &'a [u8]) -> Result<Self, FormatError> {
         let mut r = Reader::new(bytes);
-        if r.array::<4>()? != MAGIC {
-            return Err(FormatError::BadMagic);
-        }
-        let version = r.u16()?;
-        if version != VERSION {
-            return Err(FormatError::BadVersion(version));
-        }
+        r.header(MAGIC, VERSION)?;
         let samples = r.u32()?;
         let input_hash = r.u64()?;
         let status_chain = r.u64()?;

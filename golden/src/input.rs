@@ -84,13 +84,7 @@ impl<'a> Input<'a> {
     /// Parse the header of `bytes`.
     pub fn parse(bytes: &'a [u8]) -> Result<Self, FormatError> {
         let mut r = Reader::new(bytes);
-        if r.array::<4>()? != MAGIC {
-            return Err(FormatError::BadMagic);
-        }
-        let version = r.u16()?;
-        if version != VERSION {
-            return Err(FormatError::BadVersion(version));
-        }
+        r.header(MAGIC, VERSION)?;
         let samples = r.u32()?;
         let sample_period_s = f64::from_bits(r.u64()?);
         let warm_up_s = f64::from_bits(r.u64()?);

@@ -28,6 +28,19 @@ impl<'a> Reader<'a> {
         Self { buf, pos: 0 }
     }
 
+    /// A file's header: `magic`, then the format `version` (little-endian
+    /// `u16`); anything else is refused.
+    pub fn header(&mut self, magic: [u8; 4], version: u16) -> Result<(), FormatError> {
+        if self.array::<4>()? != magic {
+            return Err(FormatError::BadMagic);
+        }
+        let found = self.u16()?;
+        if found != version {
+            return Err(FormatError::BadVersion(found));
+        }
+        Ok(())
+    }
+
     /// Bytes not read yet.
     pub fn remaining(&self) -> usize {
         self.buf.len() - self.pos
