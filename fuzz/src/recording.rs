@@ -76,18 +76,7 @@ fn read(source: impl BufRead) -> Outcome {
                 if let Some(prev) = samples.last() {
                     assert!(s.t_s > prev.t_s, "time {} after {}", s.t_s, prev.t_s);
                 }
-                for v in [
-                    s.p_supply_bar,
-                    s.p_piston_bar,
-                    s.p_rod_bar,
-                    s.p_tank_bar,
-                    s.x_piston_m,
-                    s.u_valve,
-                    s.temp_oil_c,
-                ]
-                .into_iter()
-                .flatten()
-                {
+                for v in s.readings().into_iter().flatten() {
                     assert!(v.is_finite(), "reading {v}");
                 }
                 samples.push(s);

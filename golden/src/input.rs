@@ -219,15 +219,7 @@ pub fn encode(
     out.extend_from_slice(name);
     let (mut t_bits, mut dt, mut ch) = (0u64, 0i64, [0u32; 7]);
     for s in samples {
-        let v = [
-            s.p_supply_bar,
-            s.p_piston_bar,
-            s.p_rod_bar,
-            s.p_tank_bar,
-            s.x_piston_m,
-            s.u_valve,
-            s.temp_oil_c,
-        ];
+        let v = s.readings();
         let mask = v
             .iter()
             .enumerate()
@@ -278,18 +270,7 @@ mod tests {
     }
 
     fn same(a: &Sample, b: &Sample) -> bool {
-        let bits = |s: &Sample| {
-            [
-                s.p_supply_bar,
-                s.p_piston_bar,
-                s.p_rod_bar,
-                s.p_tank_bar,
-                s.x_piston_m,
-                s.u_valve,
-                s.temp_oil_c,
-            ]
-            .map(|v| v.map(f32::to_bits))
-        };
+        let bits = |s: &Sample| s.readings().map(|v| v.map(f32::to_bits));
         a.t_s.to_bits() == b.t_s.to_bits() && bits(a) == bits(b)
     }
 

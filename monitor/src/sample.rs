@@ -88,4 +88,9 @@ impl Sample {
             Channel::TempOil => self.temp_oil_c,
         }
     }
+
+    /// Every reading, in [`Channel::ALL`] order.
+    pub fn readings(&self) -> [Option<f32>; 7] {
+        Channel::ALL.map(|c| self.get(c))
+    }
 }
