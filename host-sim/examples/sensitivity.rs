@@ -2,7 +2,7 @@
 //! rig deviations from nominal: which unmodelled differences bias it most.
 //! `cargo run --release -p host-sim --example sensitivity`
 use host_sim::sim::{Rig, Scenario, SensorModel, Simulation};
-use monitor::{Monitor, Params};
+use monitor::{Monitor, Params, Sample};
 
 fn run(
     rig: Rig,
@@ -22,8 +22,8 @@ fn run(
     let mut m: Monitor<f32> = Monitor::new(params).unwrap();
     let (mut lo_i, mut hi_i, mut lo_e, mut hi_e) = (0f64, 0f64, 0f64, 0f64);
     for row in Simulation::new(sc, rig) {
-        let s = m.step(&row.sample);
-        if row.sample.t_s > params.filter.warm_up_s {
+        let s = m.step(&Sample::from(&row));
+        if row.t_s > params.filter.warm_up_s {
             if let (Some(i), Some(e)) = (s.detect_internal_lpm, s.detect_external_lpm) {
                 lo_i = lo_i.min(i as f64);
                 hi_i = hi_i.max(i as f64);

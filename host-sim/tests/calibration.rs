@@ -25,7 +25,7 @@ fn run(
         sensors: sensors.clone(),
         ..Scenario::default()
     };
-    Simulation::new(sc, rig.clone()).map(|r| r.sample).collect()
+    Simulation::new(sc, rig.clone()).map(Sample::from).collect()
 }
 
 /// A minute of the thesis work cycle: holds, slow and fast moves both ways.

@@ -11,7 +11,7 @@ fn samples(internal: f64, external: f64, seed: u64) -> Vec<Sample> {
         scenario(50.0, internal, external, 0.0, seed),
         Rig::nominal(),
     )
-    .map(|r| r.sample)
+    .map(Sample::from)
     .collect()
 }
 

@@ -168,7 +168,10 @@ fn write(a: &Args, scenario: Scenario, rig_hw: Rig) -> Result<()> {
         .with_context(|| format!("{}: cannot create", a.output.display()))?;
     for row in Simulation::new(scenario, rig_hw) {
         let truth = [row.q_internal_lpm, row.q_external_lpm];
-        w.write(&row.sample, if a.no_truth { &[] } else { &truth })?;
+        w.write(
+            &monitor::Sample::from(&row),
+            if a.no_truth { &[] } else { &truth },
+        )?;
     }
     w.close()?;
     Ok(())

@@ -5,7 +5,7 @@
 pub use super::rig::RigState;
 use super::rig::{LeakLaw, RigPhysics};
 use super::sensors::{SensorModel, Sensors};
-use monitor::{Params, Sample};
+use monitor::Params;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -247,11 +247,29 @@ impl Trajectory {
     }
 }
 
-/// One row of a simulated recording with the rig's truth beside it.
+/// One row of a simulated recording, in the simulator's own terms: what
+/// the rig's sensors read at one sample instant, with the rig's truth
+/// beside it. (It becomes a `monitor::Sample` only outside `sim`, where a
+/// row is written to a recording or fed to the monitor.)
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SimRow {
-    /// What the monitor sees.
-    pub sample: Sample,
+    /// Time since the start of the recording, s.
+    pub t_s: f64,
+    /// Supply pressure reading, bar (gauge).
+    pub p_supply_bar: f64,
+    /// Piston-chamber pressure reading, bar (gauge).
+    pub p_piston_bar: f64,
+    /// Rod-chamber pressure reading, bar (gauge).
+    pub p_rod_bar: f64,
+    /// Tank pressure reading, bar (gauge).
+    pub p_tank_bar: f64,
+    /// Piston position reading, m (0 = fully retracted).
+    pub x_piston_m: f64,
+    /// Valve command as read back, normalised to [-1, 1] (positive
+    /// extends).
+    pub u_valve: f64,
+    /// Oil temperature, °C, when the scenario writes it.
+    pub temp_oil_c: Option<f64>,
     /// True internal leak flow, l/min.
     pub q_internal_lpm: f64,
     /// True external leak flow, l/min.
@@ -331,7 +349,7 @@ fn mean_leak_flows(scenario: &Scenario, plant: &Rig, ki: f64, ke: f64) -> (f64, 
     let sim = Simulation::with_coefficients(scenario.clone(), plant.clone(), ki, ke);
     let (mut si, mut se, mut n) = (0.0, 0.0, 0usize);
     for row in sim {
-        if row.sample.t_s >= scenario.leak_onset_s {
+        if row.t_s >= scenario.leak_onset_s {
             si += row.q_internal_lpm.abs();
             se += row.q_external_lpm.abs();
             n += 1;
@@ -431,16 +449,14 @@ impl Iterator for Simulation {
         };
         let u_read = self.sensors.read_command(u, &mut self.rng);
         let row = SimRow {
-            sample: Sample {
-                t_s: t,
-                p_supply_bar: Some(r.pressures_bar[0] as f32),
-                p_piston_bar: Some(r.pressures_bar[1] as f32),
-                p_rod_bar: Some(r.pressures_bar[2] as f32),
-                p_tank_bar: Some(r.pressures_bar[3] as f32),
-                x_piston_m: Some(r.x_m as f32),
-                u_valve: Some(u_read as f32),
-                temp_oil_c: sc.write_temperature.then_some(sc.temp_c as f32),
-            },
+            t_s: t,
+            p_supply_bar: r.pressures_bar[0],
+            p_piston_bar: r.pressures_bar[1],
+            p_rod_bar: r.pressures_bar[2],
+            p_tank_bar: r.pressures_bar[3],
+            x_piston_m: r.x_m,
+            u_valve: u_read,
+            temp_oil_c: sc.write_temperature.then_some(sc.temp_c),
             q_internal_lpm: out.q_internal / LPM,
             q_external_lpm: out.q_external / LPM,
         };
