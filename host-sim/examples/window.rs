@@ -30,7 +30,7 @@ fn main() {
         &["q_internal_lpm", "q_external_lpm"],
     )
     .unwrap();
-    for row in Simulation::new(sc, Rig::nominal()) {
+    for row in Simulation::new(sc, Rig::reference()) {
         if row.t_s >= from && row.t_s <= to {
             w.write(
                 &Sample::from(&row),

@@ -200,7 +200,7 @@ fn acknowledge_floods_during_a_long_simulated_leak_never_energise_the_relay() {
         profile: Profile::Thesis,
         ..Scenario::default()
     };
-    let samples: Vec<Sample> = Simulation::new(scenario, Rig::nominal())
+    let samples: Vec<Sample> = Simulation::new(scenario, Rig::reference())
         .map(Sample::from)
         .collect();
     for every_ms in [1000, 100, 1] {

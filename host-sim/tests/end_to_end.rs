@@ -75,7 +75,7 @@ fn leak_sizes_are_estimated() {
         let mut m: Monitor<f32> = Monitor::new(&params).unwrap();
         let (mut ti, mut te) = (0.0f64, 0.0f64);
         let mut last = None;
-        for row in Simulation::new(sc, Rig::nominal()) {
+        for row in Simulation::new(sc, Rig::reference()) {
             let a = 0.001 / params.filter.evidence_window_s;
             ti += a * (row.q_internal_lpm.abs() - ti);
             te += a * (row.q_external_lpm.abs() - te);

@@ -19,7 +19,7 @@ fn one_hour_healthy_stays_finite_psd_and_silent() {
     let mut m: Monitor<f32> = Monitor::new(&Params::nominal()).unwrap();
     let mut worst = f64::MAX;
     let mut n = 0u64;
-    for row in Simulation::new(sc, Rig::nominal()) {
+    for row in Simulation::new(sc, Rig::reference()) {
         let s = m.step(&Sample::from(&row));
         assert_eq!(s.verdict, Verdict::Healthy, "alarm at t = {}", s.t_s);
         assert!(

@@ -9,7 +9,7 @@ use monitor::{Event, Monitor, Params, Sample, Status, Verdict};
 fn samples(internal: f64, external: f64, seed: u64) -> Vec<Sample> {
     Simulation::new(
         scenario(50.0, internal, external, 0.0, seed),
-        Rig::nominal(),
+        Rig::reference(),
     )
     .map(Sample::from)
     .collect()

@@ -15,7 +15,7 @@ pub struct Outcome {
 /// Simulate `scenario` on the nominal rig and run the f32 monitor with the
 /// nominal parameters over it, in memory (the CSV layer has its own tests).
 pub fn run(scenario: Scenario) -> Outcome {
-    run_with(scenario, Rig::nominal(), &Params::nominal())
+    run_with(scenario, Rig::reference(), &Params::nominal())
 }
 
 /// As `run`, with a given rig and monitor parameters.
