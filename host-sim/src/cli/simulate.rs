@@ -47,26 +47,30 @@ pub struct Args {
     /// White noise on every pressure reading, bar (1σ).
     #[arg(long)]
     pressure_noise: Option<f64>,
-    /// Simulate a rig that differs from nominal (seeded variation of
-    /// valve, friction, mass, air, dead volumes, sensor offsets).
+    /// Simulate a rig that differs from the reference rig (seeded
+    /// variation of valve, friction, mass, air, dead volumes, sensor
+    /// offsets); with --rig, of that rig.
     #[arg(long)]
     rig_seed: Option<u64>,
-    /// Rig plant parameters (TOML) instead of nominal.
-    #[arg(long)]
+    /// Simulate this rig instead of the reference rig: the simulator's own
+    /// rig data (TOML, as --dump-rig writes it; a file needs only what
+    /// differs from the reference rig). Not a monitor parameters file.
+    #[arg(long, value_name = "FILE")]
     rig: Option<PathBuf>,
     /// Omit the truth columns (q_internal_lpm, q_external_lpm).
     #[arg(long)]
     no_truth: bool,
-    /// Also write the simulated rig's hardware (the simulator's rig data,
-    /// TOML) here.
-    #[arg(long)]
+    /// Also write the simulated rig's data here (TOML, the format --rig
+    /// reads: with the same other options, --rig FILE simulates the same
+    /// rig again).
+    #[arg(long, value_name = "FILE")]
     dump_rig: Option<PathBuf>,
 }
 
 pub fn run(a: Args) -> Result<ExitCode> {
     check(&a)?;
     let base = match a.rig.as_deref() {
-        Some(path) => rig_of(&host_sim::load_params(path)?),
+        Some(path) => load_rig(path)?,
         None => Rig::reference(),
     };
     let mut scenario = scenario(&a);
@@ -122,65 +126,25 @@ fn scenario(a: &Args) -> Scenario {
     }
 }
 
-/// A rig with the plant of monitor parameters `p` (interim, until `--rig`
-/// reads the simulator's own format): sensor offsets and supply lines are
-/// the reference rig's.
-fn rig_of(p: &monitor::Params) -> Rig {
-    let mut r = Rig::reference();
-    let c = &p.cylinder;
-    r.cylinder.piston_area_m2 = c.piston_area_m2;
-    r.cylinder.rod_side_area_m2 = c.rod_side_area_m2;
-    r.cylinder.stroke_m = c.stroke_m;
-    r.cylinder.dead_volume_piston_m3 = c.dead_volume_piston_m3;
-    r.cylinder.dead_volume_rod_m3 = c.dead_volume_rod_m3;
-    let l = &p.load;
-    r.load.gravity_scale = l.gravity_scale;
-    r.load.inertia_scale = l.inertia_scale;
-    let g = &mut r.load.pantograph;
-    g.theta1_fit_deg = l.theta1_fit_deg;
-    g.theta2_fit_deg = l.theta2_fit_deg;
-    g.base_to_r21_y_m = l.base_to_r21_y_m;
-    g.r21_to_r1_m = l.r21_to_r1_m;
-    g.r21_to_r3_m = l.r21_to_r3_m;
-    g.r21_to_cg21_m = l.r21_to_cg21_m;
-    g.r1_to_cg1_m = l.r1_to_cg1_m;
-    g.r1_to_r22_m = l.r1_to_r22_m;
-    g.r22_to_cg22_m = l.r22_to_cg22_m;
-    g.r3_to_cg3_m = l.r3_to_cg3_m;
-    g.masses_kg = l.masses_kg;
-    g.inertias_kg_m2 = l.inertias_kg_m2;
-    g.force_offset_n = l.force_offset_n;
-    g.gravity_m_s2 = l.gravity_m_s2;
-    let v = &p.valve;
-    r.valve.natural_frequency_rad_s = v.natural_frequency_rad_s;
-    r.valve.damping_ratio = v.damping_ratio;
-    r.valve.flow_gain_extend_lpm_sqrt_bar = v.flow_gain_extend_lpm_sqrt_bar;
-    r.valve.flow_gain_retract_lpm_sqrt_bar = v.flow_gain_retract_lpm_sqrt_bar;
-    r.valve.edge_gain = [1.0, v.rod_edge_gain_extend, v.rod_edge_gain_retract, 1.0];
-    r.valve.dead_zone = v.dead_zone;
-    r.valve.null_offset = v.null_offset;
-    r.valve.edge_leak_lpm_per_bar = v.edge_leak_lpm_per_bar;
-    r.valve.laminar_dp_bar = v.laminar_dp_bar;
-    let f = &p.fluid;
-    r.fluid.reference_temperature_c = f.reference_temperature_c;
-    r.fluid.oil.viscosity_ratio_25_40 = (f.viscosity_temperature_coeff_per_c * 15.0).exp();
-    r.fluid.oil.bulk_modulus_bar = f.bulk_modulus_bar;
-    r.fluid.oil.air_fraction = f.air_fraction;
-    r.fluid.oil.polytropic_exponent = f.adiabatic_index;
-    let fr = &p.friction;
-    r.friction.coulomb_n = fr.coulomb_n;
-    r.friction.breakaway_n = fr.breakaway_n;
-    r.friction.stribeck_s_per_m = fr.stribeck_s_per_m;
-    r.friction.viscous_ns_per_m = fr.viscous_ns_per_m;
-    r.leakage.seal_lpm_per_bar = p.leakage.seal_lpm_per_bar;
-    r.leakage.external_lpm_per_bar = p.leakage.external_lpm_per_bar;
-    r
+/// A rig file (the simulator's own rig data, TOML), validated.
+fn load_rig(path: &std::path::Path) -> Result<Rig> {
+    let text = std::fs::read_to_string(path)
+        .with_context(|| format!("{}: cannot read", path.display()))?;
+    let rig: Rig = toml::from_str(&text).map_err(|e| {
+        anyhow::anyhow!(
+            "{}: not a rig file of the simulator (--rig takes what --dump-rig writes, not monitor parameters): {e}",
+            path.display()
+        )
+    })?;
+    rig.validate()
+        .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    Ok(rig)
 }
 
-/// The simulated rig's hardware as TOML.
+/// The simulated rig's data as TOML, in the format `--rig` reads.
 fn dump_rig(path: &std::path::Path, rig_hw: &Rig) -> Result<()> {
     let text = format!(
-        "# The simulated rig (host-sim simulate)\n{}",
+        "# Rig data of the simulated rig (host-sim simulate --rig reads it)\n{}",
         toml::to_string(rig_hw)?
     );
     std::fs::write(path, text).with_context(|| format!("{}: cannot write", path.display()))
