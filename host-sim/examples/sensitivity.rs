@@ -2,7 +2,7 @@
 //! rig deviations from nominal: which unmodelled differences bias it most.
 //! `cargo run --release -p host-sim --example sensitivity`
 use host_sim::sim::{Rig, Scenario, SensorModel, Simulation};
-use monitor::{Monitor, Params};
+use monitor::{Monitor, Params, Sample};
 
 fn run(
     rig: Rig,
@@ -22,8 +22,8 @@ fn run(
     let mut m: Monitor<f32> = Monitor::new(params).unwrap();
     let (mut lo_i, mut hi_i, mut lo_e, mut hi_e) = (0f64, 0f64, 0f64, 0f64);
     for row in Simulation::new(sc, rig) {
-        let s = m.step(&row.sample);
-        if row.sample.t_s > params.filter.warm_up_s {
+        let s = m.step(&Sample::from(&row));
+        if row.t_s > params.filter.warm_up_s {
             if let (Some(i), Some(e)) = (s.detect_internal_lpm, s.detect_external_lpm) {
                 lo_i = lo_i.min(i as f64);
                 hi_i = hi_i.max(i as f64);
@@ -41,83 +41,86 @@ fn main() {
         ("nominal", Box::new(|_, _| {})),
         (
             "Kv ext +5%",
-            Box::new(|r, _| r.plant.valve.flow_gain_extend_lpm_sqrt_bar *= 1.05),
+            Box::new(|r, _| r.valve.flow_gain_extend_lpm_sqrt_bar *= 1.05),
         ),
         (
             "Kv ret +5%",
-            Box::new(|r, _| r.plant.valve.flow_gain_retract_lpm_sqrt_bar *= 1.05),
+            Box::new(|r, _| r.valve.flow_gain_retract_lpm_sqrt_bar *= 1.05),
         ),
         (
             "Kv both -5%",
             Box::new(|r, _| {
-                r.plant.valve.flow_gain_extend_lpm_sqrt_bar *= 0.95;
-                r.plant.valve.flow_gain_retract_lpm_sqrt_bar *= 0.95;
+                r.valve.flow_gain_extend_lpm_sqrt_bar *= 0.95;
+                r.valve.flow_gain_retract_lpm_sqrt_bar *= 0.95;
             }),
         ),
-        ("edge P->A +2%", Box::new(|r, _| r.edge_gain[0] = 1.02)),
-        ("edge B->T +2%", Box::new(|r, _| r.edge_gain[1] = 1.02)),
+        (
+            "edge P->A +2%",
+            Box::new(|r, _| r.valve.edge_gain[0] = 1.02),
+        ),
+        (
+            "edge B->T +2%",
+            Box::new(|r, _| r.valve.edge_gain[1] = 1.02),
+        ),
         (
             "edge leak +30%",
-            Box::new(|r, _| r.plant.valve.edge_leak_lpm_per_bar *= 1.3),
+            Box::new(|r, _| r.valve.edge_leak_lpm_per_bar *= 1.3),
         ),
         (
             "friction +15%",
             Box::new(|r, _| {
-                r.plant.friction.coulomb_n *= 1.15;
-                r.plant.friction.breakaway_n *= 1.15;
+                r.friction.coulomb_n *= 1.15;
+                r.friction.breakaway_n *= 1.15;
             }),
         ),
         (
             "viscous +15%",
-            Box::new(|r, _| r.plant.friction.viscous_ns_per_m *= 1.15),
+            Box::new(|r, _| r.friction.viscous_ns_per_m *= 1.15),
         ),
         (
             "mass +3%",
             Box::new(|r, _| {
-                r.plant.load.inertia_scale *= 1.03;
-                r.plant.load.gravity_scale *= 1.03;
+                r.load.inertia_scale *= 1.03;
+                r.load.gravity_scale *= 1.03;
             }),
         ),
-        ("air 3%", Box::new(|r, _| r.plant.fluid.air_fraction = 0.03)),
+        ("air 3%", Box::new(|r, _| r.fluid.oil.air_fraction = 0.03)),
         (
             "air 0.5%",
-            Box::new(|r, _| r.plant.fluid.air_fraction = 0.005),
+            Box::new(|r, _| r.fluid.oil.air_fraction = 0.005),
         ),
         (
             "dead vol +10%",
             Box::new(|r, _| {
-                r.plant.cylinder.dead_volume_piston_m3 *= 1.1;
-                r.plant.cylinder.dead_volume_rod_m3 *= 1.1;
+                r.cylinder.dead_volume_piston_m3 *= 1.1;
+                r.cylinder.dead_volume_rod_m3 *= 1.1;
             }),
         ),
         (
             "p_piston +0.3 bar",
-            Box::new(|_, s| s.pressure_offsets_bar[1] = 0.3),
+            Box::new(|r, _| r.sensors.pressure_offsets_bar[1] = 0.3),
         ),
         (
             "p_rod +0.3 bar",
-            Box::new(|_, s| s.pressure_offsets_bar[2] = 0.3),
+            Box::new(|r, _| r.sensors.pressure_offsets_bar[2] = 0.3),
         ),
         (
             "p_supply +0.3 bar",
-            Box::new(|_, s| s.pressure_offsets_bar[0] = 0.3),
+            Box::new(|r, _| r.sensors.pressure_offsets_bar[0] = 0.3),
         ),
         (
             "p_tank +0.3 bar",
-            Box::new(|_, s| s.pressure_offsets_bar[3] = 0.3),
-        ),
-        ("x +1 mm", Box::new(|_, s| s.position_offset_m = 0.001)),
-        (
-            "null +0.3%",
-            Box::new(|r, _| r.plant.valve.null_offset = 0.003),
+            Box::new(|r, _| r.sensors.pressure_offsets_bar[3] = 0.3),
         ),
         (
-            "dead zone 1.8%",
-            Box::new(|r, _| r.plant.valve.dead_zone = 0.018),
+            "x +1 mm",
+            Box::new(|r, _| r.sensors.position_offset_m = 0.001),
         ),
+        ("null +0.3%", Box::new(|r, _| r.valve.null_offset = 0.003)),
+        ("dead zone 1.8%", Box::new(|r, _| r.valve.dead_zone = 0.018)),
         (
             "seal leak x2",
-            Box::new(|r, _| r.plant.leakage.seal_lpm_per_bar *= 2.0),
+            Box::new(|r, _| r.leakage.seal_lpm_per_bar *= 2.0),
         ),
     ];
     let filter: Option<String> = std::env::args().nth(1).filter(|s| !s.is_empty());
@@ -130,7 +133,7 @@ fn main() {
             if filter.as_ref().is_some_and(|s| !name.contains(s.as_str())) {
                 continue;
             }
-            let mut rig = Rig::nominal();
+            let mut rig = Rig::reference();
             let mut sensors = SensorModel::default();
             f(&mut rig, &mut sensors);
             let (a, b, c, d) = run(rig, sensors, supply, 25.0, &params);

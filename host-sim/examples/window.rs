@@ -3,6 +3,7 @@
 //! `cargo run --release -p host-sim --example window -- OUT FROM TO DURATION PROFILE SEED`
 use host_sim::recording::RecordingWriter;
 use host_sim::sim::{Profile, Rig, Scenario, Simulation};
+use monitor::Sample;
 fn main() {
     let a: Vec<String> = std::env::args().collect();
     let (out, from, to, dur) = (
@@ -29,12 +30,15 @@ fn main() {
         &["q_internal_lpm", "q_external_lpm"],
     )
     .unwrap();
-    for row in Simulation::new(sc, Rig::nominal()) {
-        if row.sample.t_s >= from && row.sample.t_s <= to {
-            w.write(&row.sample, &[row.q_internal_lpm, row.q_external_lpm])
-                .unwrap();
+    for row in Simulation::new(sc, Rig::reference()) {
+        if row.t_s >= from && row.t_s <= to {
+            w.write(
+                &Sample::from(&row),
+                &[row.q_internal_lpm, row.q_external_lpm],
+            )
+            .unwrap();
         }
-        if row.sample.t_s > to {
+        if row.t_s > to {
             break;
         }
     }

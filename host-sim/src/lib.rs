@@ -15,6 +15,7 @@ pub mod port;
 pub mod recording;
 pub mod replay;
 pub mod sim;
+pub mod sim_sample;
 
 use monitor::Params;
 use std::path::Path;

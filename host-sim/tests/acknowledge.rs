@@ -200,8 +200,8 @@ fn acknowledge_floods_during_a_long_simulated_leak_never_energise_the_relay() {
         profile: Profile::Thesis,
         ..Scenario::default()
     };
-    let samples: Vec<Sample> = Simulation::new(scenario, Rig::nominal())
-        .map(|row| row.sample)
+    let samples: Vec<Sample> = Simulation::new(scenario, Rig::reference())
+        .map(Sample::from)
         .collect();
     for every_ms in [1000, 100, 1] {
         let policy = run(samples.iter().copied(), 0.001, Some(every_ms), None);

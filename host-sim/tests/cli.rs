@@ -194,6 +194,84 @@ fn simulate_writes_a_recording_replay_reads() {
     assert!(out.status.success());
 }
 
+/// `--dump-rig` writes the simulator's rig data in the format `--rig`
+/// reads: the dumped rig simulates the same recording as the seeded rig it
+/// came from, and dumps to the same file again. A monitor parameters file
+/// is not a rig file, and a rig file the simulator cannot compute is
+/// refused naming the field.
+#[test]
+fn a_dumped_rig_round_trips_through_rig() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
+    let sim = |extra: &[&str], out: &str| {
+        let mut args = vec![
+            "simulate",
+            "-o",
+            out,
+            "--duration",
+            "2",
+            "--internal",
+            "0.2",
+        ];
+        args.extend_from_slice(extra);
+        let out = host_sim(&args);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    };
+    let (seeded, again) = (path("seeded.csv"), path("again.csv"));
+    let (dump, dump2) = (path("rig.toml"), path("rig2.toml"));
+    sim(&["--rig-seed", "21", "--dump-rig", &dump], &seeded);
+    sim(&["--rig", &dump, "--dump-rig", &dump2], &again);
+    let rows = |p: &str| -> Vec<String> {
+        let text = std::fs::read_to_string(p).unwrap();
+        text.lines()
+            .filter(|l| !l.starts_with('#'))
+            .map(str::to_string)
+            .collect()
+    };
+    let (a, b) = (rows(&seeded), rows(&again));
+    assert_eq!(a.len(), 2001);
+    assert!(a == b, "the dumped rig simulates another recording");
+    let text = std::fs::read_to_string(&dump).unwrap();
+    assert_eq!(text, std::fs::read_to_string(&dump2).unwrap());
+    assert!(
+        text.contains("[load.pantograph]") && text.contains("pressure_offsets_bar"),
+        "{text}"
+    );
+
+    let params = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/calibrated-rig21.toml");
+    let out = host_sim(&[
+        "simulate",
+        "-o",
+        &path("x.csv"),
+        "--rig",
+        params.to_str().unwrap(),
+    ]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("calibrated-rig21.toml") && err.contains("not a rig file"),
+        "{err}"
+    );
+    let bad = write(dir.path(), "bad.toml", "[cylinder]\nstroke_m = -0.18\n");
+    let out = host_sim(&[
+        "simulate",
+        "-o",
+        &path("y.csv"),
+        "--rig",
+        bad.to_str().unwrap(),
+    ]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("bad.toml") && err.contains("cylinder.stroke_m"),
+        "{err}"
+    );
+}
+
 #[test]
 fn calibrate_writes_params_that_replay_accepts() {
     let dir = tempfile::tempdir().unwrap();

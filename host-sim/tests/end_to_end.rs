@@ -68,18 +68,18 @@ fn leak_sizes_are_estimated() {
     // Level 4 leaks from the start: the estimate at the end of the run is
     // within 25 % of the true flow averaged the same way.
     use host_sim::sim::{Rig, Simulation};
-    use monitor::{Monitor, Params};
+    use monitor::{Monitor, Params, Sample};
     for (int, ext) in [(0.4, 0.0), (0.0, 0.4), (0.4, 0.4)] {
         let sc = scenario(50.0, int, ext, 0.0, 23);
         let params = Params::nominal();
         let mut m: Monitor<f32> = Monitor::new(&params).unwrap();
         let (mut ti, mut te) = (0.0f64, 0.0f64);
         let mut last = None;
-        for row in Simulation::new(sc, Rig::nominal()) {
+        for row in Simulation::new(sc, Rig::reference()) {
             let a = 0.001 / params.filter.evidence_window_s;
             ti += a * (row.q_internal_lpm.abs() - ti);
             te += a * (row.q_external_lpm.abs() - te);
-            last = Some(m.step(&row.sample));
+            last = Some(m.step(&Sample::from(&row)));
         }
         let s = last.unwrap();
         let (ei, ee) = (

@@ -3,7 +3,7 @@
 //! `cargo test --release -p host-sim --test long_run -- --ignored`
 
 use host_sim::sim::{Profile, Rig, Scenario, Simulation};
-use monitor::{Monitor, Params, Verdict};
+use monitor::{Monitor, Params, Sample, Verdict};
 
 mod common;
 
@@ -19,8 +19,8 @@ fn one_hour_healthy_stays_finite_psd_and_silent() {
     let mut m: Monitor<f32> = Monitor::new(&Params::nominal()).unwrap();
     let mut worst = f64::MAX;
     let mut n = 0u64;
-    for row in Simulation::new(sc, Rig::nominal()) {
-        let s = m.step(&row.sample);
+    for row in Simulation::new(sc, Rig::reference()) {
+        let s = m.step(&Sample::from(&row));
         assert_eq!(s.verdict, Verdict::Healthy, "alarm at t = {}", s.t_s);
         assert!(
             s.events.is_empty(),

@@ -9,9 +9,9 @@ use monitor::{Event, Monitor, Params, Sample, Status, Verdict};
 fn samples(internal: f64, external: f64, seed: u64) -> Vec<Sample> {
     Simulation::new(
         scenario(50.0, internal, external, 0.0, seed),
-        Rig::nominal(),
+        Rig::reference(),
     )
-    .map(|r| r.sample)
+    .map(Sample::from)
     .collect()
 }
 

@@ -2,7 +2,7 @@
 
 use anyhow::{Context, Result};
 use host_sim::recording::RecordingWriter;
-use host_sim::sim::{perturbed_rig, LeakLaw, Profile, Rig, Scenario, Simulation};
+use host_sim::sim::{LeakLaw, Profile, Rig, Scenario, Simulation};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -47,41 +47,42 @@ pub struct Args {
     /// White noise on every pressure reading, bar (1σ).
     #[arg(long)]
     pressure_noise: Option<f64>,
-    /// Simulate a rig that differs from nominal (seeded variation of
-    /// valve, friction, mass, air, dead volumes, sensor offsets).
+    /// Simulate a rig that differs from the reference rig (seeded
+    /// variation of valve, friction, mass, air, dead volumes, sensor
+    /// offsets); with --rig, of that rig.
     #[arg(long)]
     rig_seed: Option<u64>,
-    /// Rig plant parameters (TOML) instead of nominal.
-    #[arg(long)]
+    /// Simulate this rig instead of the reference rig: the simulator's own
+    /// rig data (TOML, as --dump-rig writes it; a file needs only what
+    /// differs from the reference rig). Not a monitor parameters file.
+    #[arg(long, value_name = "FILE")]
     rig: Option<PathBuf>,
     /// Omit the truth columns (q_internal_lpm, q_external_lpm).
     #[arg(long)]
     no_truth: bool,
-    /// Also write the simulated rig's true plant parameters (TOML) here.
-    #[arg(long)]
+    /// Also write the simulated rig's data here (TOML, the format --rig
+    /// reads: with the same other options, --rig FILE simulates the same
+    /// rig again).
+    #[arg(long, value_name = "FILE")]
     dump_rig: Option<PathBuf>,
 }
 
 pub fn run(a: Args) -> Result<ExitCode> {
     check(&a)?;
-    let nominal = host_sim::load_params_or_nominal(a.rig.as_deref())?;
+    let base = match a.rig.as_deref() {
+        Some(path) => load_rig(path)?,
+        None => Rig::reference(),
+    };
     let mut scenario = scenario(&a);
     let rig_hw = match a.rig_seed {
-        Some(s) => {
-            let (r, sensors) = perturbed_rig(&nominal, s);
-            scenario.sensors = sensors;
-            r
-        }
-        None => Rig {
-            plant: nominal,
-            ..Rig::nominal()
-        },
+        Some(s) => base.perturbed(s),
+        None => base,
     };
     if let Some(n) = a.pressure_noise {
         scenario.sensors.pressure_noise_bar = n;
     }
     if let Some(path) = &a.dump_rig {
-        dump_rig(path, &rig_hw, &scenario)?;
+        dump_rig(path, &rig_hw)?;
     }
     write(&a, scenario, rig_hw)?;
     Ok(ExitCode::SUCCESS)
@@ -125,15 +126,26 @@ fn scenario(a: &Args) -> Scenario {
     }
 }
 
-/// The simulated rig's true plant parameters as TOML.
-fn dump_rig(path: &std::path::Path, rig_hw: &Rig, scenario: &Scenario) -> Result<()> {
-    let mut truth = rig_hw.plant.clone();
-    truth.sensors.pressure_offsets_bar = scenario.sensors.pressure_offsets_bar;
-    truth.sensors.position_offset_m = scenario.sensors.position_offset_m;
+/// A rig file (the simulator's own rig data, TOML), validated.
+fn load_rig(path: &std::path::Path) -> Result<Rig> {
+    let text = std::fs::read_to_string(path)
+        .with_context(|| format!("{}: cannot read", path.display()))?;
+    let rig: Rig = toml::from_str(&text).map_err(|e| {
+        anyhow::anyhow!(
+            "{}: not a rig file of the simulator (--rig takes what --dump-rig writes, not monitor parameters): {e}",
+            path.display()
+        )
+    })?;
+    rig.validate()
+        .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    Ok(rig)
+}
+
+/// The simulated rig's data as TOML, in the format `--rig` reads.
+fn dump_rig(path: &std::path::Path, rig_hw: &Rig) -> Result<()> {
     let text = format!(
-        "# True plant of the simulated rig (edge gains P→A, B→T, P→B, A→T: {:?})\n{}",
-        rig_hw.edge_gain,
-        toml::to_string(&truth)?
+        "# Rig data of the simulated rig (host-sim simulate --rig reads it)\n{}",
+        toml::to_string(rig_hw)?
     );
     std::fs::write(path, text).with_context(|| format!("{}: cannot write", path.display()))
 }
@@ -168,7 +180,10 @@ fn write(a: &Args, scenario: Scenario, rig_hw: Rig) -> Result<()> {
         .with_context(|| format!("{}: cannot create", a.output.display()))?;
     for row in Simulation::new(scenario, rig_hw) {
         let truth = [row.q_internal_lpm, row.q_external_lpm];
-        w.write(&row.sample, if a.no_truth { &[] } else { &truth })?;
+        w.write(
+            &monitor::Sample::from(&row),
+            if a.no_truth { &[] } else { &truth },
+        )?;
     }
     w.close()?;
     Ok(())

@@ -17,14 +17,14 @@
 //!
 //! Sensors (lag, noise, offsets, quantisation) are in `sensors.rs`.
 //!
-//! The crane's load and the oil (bulk modulus with air, viscosity) come
-//! from the independent `plant` crate's models, not the monitor's: the
-//! parameters are read from a `monitor::Params` (a data set), but no
-//! model code of the monitor computes this rig.
+//! Both the model and the data are the simulator's own: the rig's values
+//! are a [`Rig`] (`rig_data.rs`, the reference rig's numbers written there
+//! as literals), not the monitor's `Params`, and the crane's load and the
+//! oil (bulk modulus with air, viscosity) are computed by the independent
+//! `plant` crate's models. Nothing of the monitor — neither model code nor
+//! model data types — computes this rig.
 
-use monitor::Params;
-use plant::{FluidSpec, LoadSpec};
-
+use super::rig_data::Rig;
 use super::{BAR, LPM};
 
 /// Points of the tabulated load over the stroke.
@@ -44,28 +44,10 @@ struct LoadCurve {
 }
 
 impl LoadCurve {
-    fn new(p: &Params) -> Self {
-        let l = &p.load;
-        let spec = |mass_scale: f64| LoadSpec {
-            theta1_fit_deg: l.theta1_fit_deg,
-            theta2_fit_deg: l.theta2_fit_deg,
-            base_to_r21_y_m: l.base_to_r21_y_m,
-            r21_to_r1_m: l.r21_to_r1_m,
-            r21_to_r3_m: l.r21_to_r3_m,
-            r21_to_cg21_m: l.r21_to_cg21_m,
-            r1_to_cg1_m: l.r1_to_cg1_m,
-            r1_to_r22_m: l.r1_to_r22_m,
-            r22_to_cg22_m: l.r22_to_cg22_m,
-            r3_to_cg3_m: l.r3_to_cg3_m,
-            masses_kg: l.masses_kg.map(|m| m * mass_scale),
-            inertias_kg_m2: l.inertias_kg_m2.map(|i| i * mass_scale),
-            payload_kg: 0.0,
-            force_offset_n: l.force_offset_n,
-            gravity_m_s2: l.gravity_m_s2,
-            ..LoadSpec::nominal()
-        };
-        let (weight, inertia) = (spec(l.gravity_scale), spec(l.inertia_scale));
-        let stroke_m = p.cylinder.stroke_m;
+    fn new(rig: &Rig) -> Self {
+        let l = &rig.load;
+        let (weight, inertia) = (l.scaled(l.gravity_scale), l.scaled(l.inertia_scale));
+        let stroke_m = rig.cylinder.stroke_m;
         let x = |k: usize| stroke_m * k as f64 / (LOAD_POINTS - 1) as f64;
         let h = 1e-5;
         Self {
@@ -99,19 +81,6 @@ impl LoadCurve {
     }
 }
 
-/// The oil of `p` in `plant`'s terms: its bulk modulus with air and its
-/// viscosity law through the same 25 → 40 °C ratio.
-fn oil(p: &Params) -> FluidSpec {
-    let f = &p.fluid;
-    FluidSpec {
-        viscosity_40c_cst: 46.0,
-        viscosity_ratio_25_40: (f.viscosity_temperature_coeff_per_c * 15.0).exp(),
-        bulk_modulus_bar: f.bulk_modulus_bar,
-        air_fraction: f.air_fraction,
-        polytropic_exponent: f.adiabatic_index,
-    }
-}
-
 /// How a leak's flow depends on its pressure difference.
 #[derive(
     Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize, clap::ValueEnum,
@@ -124,27 +93,16 @@ pub enum LeakLaw {
     Orifice,
 }
 
-/// Everything about the rig that the monitor does not get told.
+/// A rig running: its data, the operating point and the leaks of the
+/// scenario, and the load tabulated from the data.
 #[derive(Clone, Debug)]
 pub struct RigPhysics {
-    /// Plant parameters of this rig (nominal or perturbed).
-    pub plant: Params,
-    /// Per-edge multipliers on the valve flow gains: P→A, B→T, P→B, A→T.
-    pub edge_gain: [f64; 4],
-    /// Per-edge multipliers on the covered-edge leakage: P→A, A→T, P→B, B→T.
-    pub edge_leak: [f64; 4],
+    /// The rig's hardware (reference or perturbed).
+    rig: Rig,
     /// Oil temperature, °C.
     pub temp_c: f64,
     /// Supply set pressure, bar.
     pub supply_bar: f64,
-    /// Supply droop at 20 l/min drawn, bar.
-    pub supply_droop_bar: f64,
-    /// Supply ripple amplitude, bar, and frequency, Hz.
-    pub supply_ripple: (f64, f64),
-    /// Tank pressure at zero return flow, bar.
-    pub tank_bar: f64,
-    /// Return line back pressure at 20 l/min, bar.
-    pub tank_rise_bar: f64,
     /// Internal leak coefficient (units per `internal_law`: m³/(s·Pa) or
     /// m³/(s·√Pa)).
     pub internal_k: f64,
@@ -158,8 +116,6 @@ pub struct RigPhysics {
     pub leak_onset_s: f64,
     /// The load over the stroke (from `plant`).
     load: LoadCurve,
-    /// The oil (from `plant`).
-    oil: FluidSpec,
 }
 
 /// Physical state.
@@ -193,20 +149,14 @@ pub struct RigOutputs {
 }
 
 impl RigPhysics {
-    /// A rig with the given plant and no leaks.
-    pub fn new(plant: Params, supply_bar: f64, temp_c: f64) -> Self {
+    /// Rig `rig` at supply set pressure `supply_bar` (bar) and oil
+    /// temperature `temp_c` (°C), with no leaks.
+    pub fn new(rig: Rig, supply_bar: f64, temp_c: f64) -> Self {
         Self {
-            load: LoadCurve::new(&plant),
-            oil: oil(&plant),
-            plant,
-            edge_gain: [1.0; 4],
-            edge_leak: [1.0; 4],
+            load: LoadCurve::new(&rig),
+            rig,
             temp_c,
             supply_bar,
-            supply_droop_bar: 1.5,
-            supply_ripple: (0.15, 190.0),
-            tank_bar: 0.6,
-            tank_rise_bar: 1.0,
             internal_k: 0.0,
             internal_law: LeakLaw::Laminar,
             external_k: 0.0,
@@ -215,10 +165,15 @@ impl RigPhysics {
         }
     }
 
+    /// The rig's hardware.
+    pub fn rig(&self) -> &Rig {
+        &self.rig
+    }
+
     /// ν(T_ref)/ν(T): laminar flows scale with it.
     fn laminar_factor(&self) -> f64 {
-        let t_ref = self.plant.fluid.reference_temperature_c;
-        self.oil.viscosity_cst(t_ref) / self.oil.viscosity_cst(self.temp_c)
+        let f = &self.rig.fluid;
+        f.oil.viscosity_cst(f.reference_temperature_c) / f.oil.viscosity_cst(self.temp_c)
     }
 
     /// Leak flow through a leak of coefficient `k`, law `law`, at `dp` Pa.
@@ -233,21 +188,22 @@ impl RigPhysics {
     /// Supply and tank pressures given the flows drawn from P and returned
     /// to T (m³/s) at time `t`.
     fn port_pressures(&self, q_p: f64, q_t: f64, t: f64) -> (f64, f64) {
+        let s = &self.rig.supply;
         let ref_q = 20.0 * LPM;
         let draw = (q_p.max(0.0) / ref_q).powi(2);
-        let (amp, freq) = self.supply_ripple;
-        let p2 = (self.supply_bar - self.supply_droop_bar * draw) * BAR
+        let (amp, freq) = (s.ripple_bar, s.ripple_hz);
+        let p2 = (self.supply_bar - s.droop_bar * draw) * BAR
             + amp * BAR * (2.0 * std::f64::consts::PI * freq * t).sin();
-        let p5 = (self.tank_bar + self.tank_rise_bar * (q_t.max(0.0) / ref_q).powi(2)) * BAR;
+        let p5 = (s.tank_bar + s.tank_rise_bar * (q_t.max(0.0) / ref_q).powi(2)) * BAR;
         (p2, p5)
     }
 
     /// Time derivative of the state under spool command `u` at time `t`,
     /// with the port pressures used.
     pub fn derivative(&self, s: &RigState, u: f64, t: f64) -> (RigState, RigOutputs) {
-        let p = &self.plant;
-        let c = &p.cylinder;
-        let vlv = &p.valve;
+        let rig = &self.rig;
+        let c = &rig.cylinder;
+        let vlv = &rig.valve;
         let lam = self.laminar_factor();
         let kv = |g: f64| g * LPM / BAR.sqrt();
         let k_edge = vlv.edge_leak_lpm_per_bar * LPM / BAR * lam;
@@ -260,31 +216,24 @@ impl RigPhysics {
 
         // Port pressures depend on the flows, which depend weakly on them:
         // one fixed-point pass from the set values is plenty.
-        let (mut p2, mut p5) = (self.supply_bar * BAR, self.tank_bar * BAR);
+        let (mut p2, mut p5) = (self.supply_bar * BAR, rig.supply.tank_bar * BAR);
         let mut flows = [0.0; 4];
         for _ in 0..2 {
-            let q_pa = kv_ext * self.edge_gain[0] * open_pos * orifice(p2 - s.p3);
-            let q_bt = kv_ext
-                * self.edge_gain[1]
-                * vlv.rod_edge_gain_extend
-                * open_pos
-                * orifice(s.p4 - p5);
-            let q_pb = kv_ret
-                * self.edge_gain[2]
-                * vlv.rod_edge_gain_retract
-                * open_neg
-                * orifice(p2 - s.p4);
-            let q_at = kv_ret * self.edge_gain[3] * open_neg * orifice(s.p3 - p5);
+            let g = vlv.edge_gain;
+            let q_pa = kv_ext * g[0] * open_pos * orifice(p2 - s.p3);
+            let q_bt = kv_ext * g[1] * open_pos * orifice(s.p4 - p5);
+            let q_pb = kv_ret * g[2] * open_neg * orifice(p2 - s.p4);
+            let q_at = kv_ret * g[3] * open_neg * orifice(s.p3 - p5);
             flows = [q_pa, q_bt, q_pb, q_at];
             let (a, b) = self.port_pressures(q_pa + q_pb, q_bt + q_at, t);
             p2 = a;
             p5 = b;
         }
         let [q_pa, q_bt, q_pb, q_at] = flows;
-        let l = self.edge_leak;
+        let l = vlv.edge_leak;
         let leak_a = k_edge * (l[0] * (p2 - s.p3) - l[1] * (s.p3 - p5));
         let leak_b = k_edge * (l[2] * (p2 - s.p4) - l[3] * (s.p4 - p5));
-        let seal = p.leakage.seal_lpm_per_bar * LPM / BAR * lam * (s.p3 - s.p4);
+        let seal = rig.leakage.seal_lpm_per_bar * LPM / BAR * lam * (s.p3 - s.p4);
         let leaking = t >= self.leak_onset_s;
         let q_int = if leaking {
             self.leak_flow(self.internal_k, self.internal_law, s.p3 - s.p4)
@@ -296,15 +245,16 @@ impl RigPhysics {
         } else {
             0.0
         };
-        let ext_base = p.leakage.external_lpm_per_bar * LPM / BAR * lam * (s.p4 - p5);
+        let ext_base = rig.leakage.external_lpm_per_bar * LPM / BAR * lam * (s.p4 - p5);
 
         let xc = s.x.clamp(0.0, c.stroke_m);
         let vol_a = c.dead_volume_piston_m3 + c.piston_area_m2 * xc;
         let vol_b = c.dead_volume_rod_m3 + c.rod_side_area_m2 * (c.stroke_m - xc);
         // Warm oil is a little softer (≈ 0.4 %/°C).
         let soft = (1.0 - 0.004 * (self.temp_c - 25.0)).clamp(0.6, 1.2);
-        let beta3 = self.oil.bulk_modulus_bar(s.p3 / BAR) * BAR * soft;
-        let beta4 = self.oil.bulk_modulus_bar(s.p4 / BAR) * BAR * soft;
+        let oil = &rig.fluid.oil;
+        let beta3 = oil.bulk_modulus_bar(s.p3 / BAR) * BAR * soft;
+        let beta4 = oil.bulk_modulus_bar(s.p4 / BAR) * BAR * soft;
         let dp3 = beta3 / vol_a * (q_pa - q_at + leak_a - seal - q_int - c.piston_area_m2 * s.v);
         let dp4 = beta4 / vol_b
             * (q_pb - q_bt + leak_b + seal + q_int - q_ext - ext_base + c.rod_side_area_m2 * s.v);
@@ -319,7 +269,7 @@ impl RigPhysics {
             f_stop = -2e8 * (s.x - c.stroke_m) - 2e5 * s.v.max(0.0);
         }
         let f_drive = f_hyd - gravity_n - c2_kg_m * s.v * s.v + f_stop;
-        let fr = &p.friction;
+        let fr = &rig.friction;
         // Viscous friction follows viscosity weakly.
         let b_visc = fr.viscous_ns_per_m / lam.powf(0.3);
         let v_stick = 1e-4;
@@ -398,7 +348,7 @@ impl RigPhysics {
     /// A static starting point at position `x`: spool centred, pressures at
     /// the force balance the valve leakage would settle to.
     pub fn rest_state(&self, x: f64) -> RigState {
-        let c = &self.plant.cylinder;
+        let c = &self.rig.cylinder;
         let (gravity_n, _, _) = self.load.at(x);
         // Rod side near the leakage balance, piston side carries the load.
         let p4 = (0.5 * self.supply_bar * BAR).min(0.45 * self.supply_bar * BAR);

@@ -1,11 +1,12 @@
 //! Scenarios: what the rig does (position profile under a P controller, or
 //! open-loop valve steps), at which supply pressure and oil temperature,
-//! with which leaks from when, and the rig's own parameters.
+//! with which leaks from when, on which rig (the simulator's own [`Rig`]
+//! data).
 
 pub use super::rig::RigState;
 use super::rig::{LeakLaw, RigPhysics};
+use super::rig_data::Rig;
 use super::sensors::{SensorModel, Sensors};
-use monitor::{Params, Sample};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -63,7 +64,8 @@ pub struct Scenario {
     pub controller_gain_per_m: f64,
     /// Controller output limit.
     pub command_limit: f64,
-    /// The sensors.
+    /// The sensors' lag, noise and quantisation (their offsets are the
+    /// rig's).
     pub sensors: SensorModel,
 }
 
@@ -247,11 +249,29 @@ impl Trajectory {
     }
 }
 
-/// One row of a simulated recording with the rig's truth beside it.
+/// One row of a simulated recording, in the simulator's own terms: what
+/// the rig's sensors read at one sample instant, with the rig's truth
+/// beside it. (It becomes a `monitor::Sample` only outside `sim`, where a
+/// row is written to a recording or fed to the monitor.)
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SimRow {
-    /// What the monitor sees.
-    pub sample: Sample,
+    /// Time since the start of the recording, s.
+    pub t_s: f64,
+    /// Supply pressure reading, bar (gauge).
+    pub p_supply_bar: f64,
+    /// Piston-chamber pressure reading, bar (gauge).
+    pub p_piston_bar: f64,
+    /// Rod-chamber pressure reading, bar (gauge).
+    pub p_rod_bar: f64,
+    /// Tank pressure reading, bar (gauge).
+    pub p_tank_bar: f64,
+    /// Piston position reading, m (0 = fully retracted).
+    pub x_piston_m: f64,
+    /// Valve command as read back, normalised to [-1, 1] (positive
+    /// extends).
+    pub u_valve: f64,
+    /// Oil temperature, °C, when the scenario writes it.
+    pub temp_oil_c: Option<f64>,
     /// True internal leak flow, l/min.
     pub q_internal_lpm: f64,
     /// True external leak flow, l/min.
@@ -269,26 +289,6 @@ pub struct Simulation {
     k: u64,
     n: u64,
     substeps: u32,
-}
-
-/// The rig's own hardware: its plant parameters and the mismatch between
-/// the valve's metering edges (which the monitor's model does not have).
-#[derive(Clone, Debug, PartialEq)]
-pub struct Rig {
-    /// Plant parameters.
-    pub plant: Params,
-    /// Flow-gain multipliers of the edges P→A, B→T, P→B, A→T.
-    pub edge_gain: [f64; 4],
-}
-
-impl Rig {
-    /// The reference thesis rig.
-    pub fn nominal() -> Self {
-        Self {
-            plant: Params::nominal(),
-            edge_gain: [1.0; 4],
-        }
-    }
 }
 
 /// Leak coefficients of the rig for `scenario` (see `Simulation::new`).
@@ -331,7 +331,7 @@ fn mean_leak_flows(scenario: &Scenario, plant: &Rig, ki: f64, ke: f64) -> (f64, 
     let sim = Simulation::with_coefficients(scenario.clone(), plant.clone(), ki, ke);
     let (mut si, mut se, mut n) = (0.0, 0.0, 0usize);
     for row in sim {
-        if row.sample.t_s >= scenario.leak_onset_s {
+        if row.t_s >= scenario.leak_onset_s {
             si += row.q_internal_lpm.abs();
             se += row.q_external_lpm.abs();
             n += 1;
@@ -342,10 +342,10 @@ fn mean_leak_flows(scenario: &Scenario, plant: &Rig, ki: f64, ke: f64) -> (f64, 
 }
 
 impl Simulation {
-    /// A run of `scenario` on a rig with plant parameters `plant`. The leak
-    /// coefficients are found so that the mean leak flows after onset are
-    /// the scenario's l/min (up to three full-length pre-runs: a leaky run
-    /// costs up to four healthy ones).
+    /// A run of `scenario` on rig `plant`. The leak coefficients are found
+    /// so that the mean leak flows after onset are the scenario's l/min (up
+    /// to three full-length pre-runs: a leaky run costs up to four healthy
+    /// ones).
     pub fn new(scenario: Scenario, plant: Rig) -> Self {
         let (ki, ke) = leak_coefficients(&scenario, &plant);
         Self::with_coefficients(scenario, plant, ki, ke)
@@ -354,8 +354,8 @@ impl Simulation {
     /// A run with explicit leak coefficients (laminar: m³/(s·Pa), orifice:
     /// m³/(s·√Pa)).
     pub fn with_coefficients(scenario: Scenario, plant: Rig, ki: f64, ke: f64) -> Self {
-        let mut rig = RigPhysics::new(plant.plant, scenario.supply_bar, scenario.temp_c);
-        rig.edge_gain = plant.edge_gain;
+        let offsets = plant.sensors.clone();
+        let mut rig = RigPhysics::new(plant, scenario.supply_bar, scenario.temp_c);
         rig.internal_k = ki;
         rig.internal_law = scenario.internal_law;
         rig.external_k = ke;
@@ -386,7 +386,7 @@ impl Simulation {
         let n = (scenario.duration_s * scenario.sample_rate_hz).round() as u64;
         let substeps = ((1.0 / scenario.sample_rate_hz) / h).round().max(1.0) as u32;
         Self {
-            sensors: Sensors::new(scenario.sensors.clone()),
+            sensors: Sensors::new(scenario.sensors.clone(), offsets),
             rng: ChaCha8Rng::seed_from_u64(scenario.seed),
             traj,
             state,
@@ -431,16 +431,14 @@ impl Iterator for Simulation {
         };
         let u_read = self.sensors.read_command(u, &mut self.rng);
         let row = SimRow {
-            sample: Sample {
-                t_s: t,
-                p_supply_bar: Some(r.pressures_bar[0] as f32),
-                p_piston_bar: Some(r.pressures_bar[1] as f32),
-                p_rod_bar: Some(r.pressures_bar[2] as f32),
-                p_tank_bar: Some(r.pressures_bar[3] as f32),
-                x_piston_m: Some(r.x_m as f32),
-                u_valve: Some(u_read as f32),
-                temp_oil_c: sc.write_temperature.then_some(sc.temp_c as f32),
-            },
+            t_s: t,
+            p_supply_bar: r.pressures_bar[0],
+            p_piston_bar: r.pressures_bar[1],
+            p_rod_bar: r.pressures_bar[2],
+            p_tank_bar: r.pressures_bar[3],
+            x_piston_m: r.x_m,
+            u_valve: u_read,
+            temp_oil_c: sc.write_temperature.then_some(sc.temp_c),
             q_internal_lpm: out.q_internal / LPM,
             q_external_lpm: out.q_external / LPM,
         };
@@ -464,38 +462,8 @@ impl Simulation {
     }
 }
 
-/// Random rig-to-rig variation, as in a fleet of installations built to the
-/// same drawing: valve coefficients ±5 % (and per-edge ±2 %), friction
-/// ±15 %, moving mass ±3 %, entrained air 0.5–3 %, covered-edge leakage
-/// ±30 %, dead volumes ±10 %, sensor offsets (±0.3 bar, ±1 mm).
-pub fn perturbed_rig(nominal: &Params, seed: u64) -> (Rig, SensorModel) {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ 0xA5A5);
-    let mut u = |lo: f64, hi: f64| lo + (hi - lo) * rng.random::<f64>();
-    let mut p = nominal.clone();
-    p.valve.flow_gain_extend_lpm_sqrt_bar *= u(0.95, 1.05);
-    p.valve.flow_gain_retract_lpm_sqrt_bar *= u(0.95, 1.05);
-    p.valve.edge_leak_lpm_per_bar *= u(0.7, 1.3);
-    let f = u(0.85, 1.15);
-    p.friction.coulomb_n *= f;
-    p.friction.breakaway_n *= f * u(0.95, 1.05);
-    p.friction.viscous_ns_per_m *= u(0.85, 1.15);
-    let m = u(0.97, 1.03);
-    p.load.inertia_scale *= m;
-    p.load.gravity_scale *= m;
-    p.fluid.air_fraction = u(0.005, 0.03);
-    p.cylinder.dead_volume_piston_m3 *= u(0.9, 1.1);
-    p.cylinder.dead_volume_rod_m3 *= u(0.9, 1.1);
-    let edge = [u(0.98, 1.02), u(0.98, 1.02), u(0.98, 1.02), u(0.98, 1.02)];
-    let sensors = SensorModel {
-        pressure_offsets_bar: [u(-0.3, 0.3), u(-0.3, 0.3), u(-0.3, 0.3), u(-0.3, 0.3)],
-        position_offset_m: u(-0.001, 0.001),
-        ..SensorModel::default()
-    };
-    (
-        Rig {
-            plant: p,
-            edge_gain: edge,
-        },
-        sensors,
-    )
+/// The reference rig with random rig-to-rig variation from `seed` (see
+/// [`Rig::perturbed`]): the rigs `--rig-seed` simulates.
+pub fn perturbed_rig(seed: u64) -> Rig {
+    Rig::reference().perturbed(seed)
 }

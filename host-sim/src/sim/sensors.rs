@@ -1,12 +1,15 @@
 //! The measurement chain of the rig: 4–20 mA pressure transmitters with a
 //! first-order lag, a position transducer, the valve command read back by
-//! the ADC; white noise, offsets and ADC quantisation on each.
+//! the ADC; white noise, offsets and ADC quantisation on each. The offsets
+//! are the rig's ([`SensorOffsets`]), the rest is the scenario's
+//! [`SensorModel`].
 
+use super::rig_data::SensorOffsets;
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::StandardNormal;
 
-/// Sensor imperfections.
+/// Sensor imperfections other than offsets (those are the rig's).
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct SensorModel {
@@ -24,10 +27,6 @@ pub struct SensorModel {
     pub position_step_m: f64,
     /// Quantisation step of the valve command reading.
     pub command_step: f64,
-    /// Offsets of the supply, piston, rod and tank pressure readings, bar.
-    pub pressure_offsets_bar: [f64; 4],
-    /// Offset of the position reading, m.
-    pub position_offset_m: f64,
 }
 
 impl Default for SensorModel {
@@ -44,8 +43,6 @@ impl Default for SensorModel {
             position_step_m: 1.2e-5,
             // 12-bit over ±10 V, 4× oversampling.
             command_step: 1.2e-4,
-            pressure_offsets_bar: [0.0; 4],
-            position_offset_m: 0.0,
         }
     }
 }
@@ -54,6 +51,7 @@ impl Default for SensorModel {
 #[derive(Clone, Debug)]
 pub struct Sensors {
     model: SensorModel,
+    offsets: SensorOffsets,
     lagged: Option<[f64; 4]>,
 }
 
@@ -67,10 +65,11 @@ pub struct Readings {
 }
 
 impl Sensors {
-    /// A sensor chain.
-    pub fn new(model: SensorModel) -> Self {
+    /// A sensor chain with imperfections `model` and the rig's `offsets`.
+    pub fn new(model: SensorModel, offsets: SensorOffsets) -> Self {
         Self {
             model,
+            offsets,
             lagged: None,
         }
     }
@@ -92,13 +91,13 @@ impl Sensors {
 
     /// Read the pressures and the position now.
     pub fn read(&self, x_m: f64, rng: &mut ChaCha8Rng) -> Readings {
-        let m = &self.model;
+        let (m, o) = (&self.model, &self.offsets);
         let lagged = self.lagged.unwrap_or([0.0; 4]);
         let mut pressures_bar = [0.0; 4];
         for i in 0..4 {
             let n: f64 = rng.sample(StandardNormal);
             pressures_bar[i] = quantise(
-                lagged[i] + m.pressure_offsets_bar[i] + m.pressure_noise_bar * n,
+                lagged[i] + o.pressure_offsets_bar[i] + m.pressure_noise_bar * n,
                 m.pressure_step_bar,
             );
         }
@@ -106,7 +105,7 @@ impl Sensors {
         Readings {
             pressures_bar,
             x_m: quantise(
-                x_m + m.position_offset_m + m.position_noise_m * n,
+                x_m + o.position_offset_m + m.position_noise_m * n,
                 m.position_step_m,
             ),
         }

@@ -2,7 +2,7 @@
 #![allow(dead_code)]
 
 use host_sim::sim::{Profile, Rig, Scenario, Simulation};
-use monitor::{Event, Monitor, Params, Status, Verdict};
+use monitor::{Event, Monitor, Params, Sample, Status, Verdict};
 
 /// What a whole run produced.
 pub struct Outcome {
@@ -15,7 +15,7 @@ pub struct Outcome {
 /// Simulate `scenario` on the nominal rig and run the f32 monitor with the
 /// nominal parameters over it, in memory (the CSV layer has its own tests).
 pub fn run(scenario: Scenario) -> Outcome {
-    run_with(scenario, Rig::nominal(), &Params::nominal())
+    run_with(scenario, Rig::reference(), &Params::nominal())
 }
 
 /// As `run`, with a given rig and monitor parameters.
@@ -25,7 +25,7 @@ pub fn run_with(scenario: Scenario, rig: Rig, params: &Params) -> Outcome {
     let mut last = None;
     let mut samples = 0;
     for row in Simulation::new(scenario, rig) {
-        let s = m.step(&row.sample);
+        let s = m.step(&Sample::from(&row));
         for e in &s.events {
             if let Event::AlarmRaised(v) = e {
                 alarms.push((s.t_s, *v));
