@@ -17,6 +17,10 @@
    challenge it answers; the tag in bytes 2..8 must be the first 6 bytes
    of HMAC-SHA256(key, "LM" 0x01 id-LE command counter challenge-LE),
    computed here with Python's own `hmac`, and the CRC covers the tag.
+4. Node numbers: a vector with "node": N carries a frame of the monitor
+   at node N; its identifier must be the DBC message's + 0x20 * N (the
+   rule the DBC's comment states), and its CRC and tag are computed over
+   that identifier.
 
 usage: check_dbc.py DBC VECTORS.jsonl HOST_SIM_BINARY
 """
@@ -33,6 +37,7 @@ import cantools
 import e2e
 
 COUNTER_MODULUS = 15
+NODE_STRIDE = 0x20
 HEADER = ("CRC", "Counter")
 
 failures = []
@@ -75,13 +80,17 @@ def check_rust_frames(db, vectors):
     counters = {}
     checked = 0
     tags = 0
+    nodes = set()
     for n, v in enumerate(vectors, 1):
         where = f"vector {n} ({v['message']})"
         data = bytes.fromhex(v["data"])
+        node = v.get("node", 0)
+        if node:
+            nodes.add(node)
         try:
-            msg = db.get_message_by_frame_id(v["id"])
+            msg = db.get_message_by_frame_id(v["id"] - NODE_STRIDE * node)
         except KeyError:
-            fail(f"{where}: id {v['id']:#x} not in the DBC")
+            fail(f"{where}: id {v['id']:#x} of node {node} not in the DBC")
             continue
         if msg.name != v["message"]:
             fail(f"{where}: the DBC calls id {v['id']:#x} {msg.name}")
@@ -117,7 +126,12 @@ def check_rust_frames(db, vectors):
                     fail(f"{where}: {name} not available in Rust, cantools reads {got}")
             elif not same(got, exp):
                 fail(f"{where}: {name}: Rust {exp}, cantools {got}")
-    print(f"Rust -> DBC: {len(vectors)} frames, {checked} signals compared, {tags} acknowledge tags verified")
+    print(
+        f"Rust -> DBC: {len(vectors)} frames, {checked} signals compared, "
+        f"{tags} acknowledge tags verified, nodes other than 0: {sorted(nodes)}"
+    )
+    if not nodes:
+        fail("no frame of a node other than 0 among the vectors")
     if tags == 0:
         fail("no acknowledge frame with a verified tag among the vectors")
 

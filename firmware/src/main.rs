@@ -77,13 +77,15 @@ async fn can_start(
     tx: Peri<'static, PB9>,
     seed: u64,
 ) {
-    let (tx, rx) = stm32::can::start(can, rx, tx).await;
+    let node = installation::INSTALLATION.node();
+    let (tx, rx) = stm32::can::start(can, rx, tx, node).await;
     defmt::info!(
-        "CAN: on the bus at {} bit/s",
-        monitor::protocol::BITRATE_BPS
+        "CAN: on the bus at {} bit/s as node {}",
+        monitor::protocol::BITRATE_BPS,
+        node.number()
     );
-    spawner.spawn(unwrap!(can_tx(tx)));
-    spawner.spawn(unwrap!(can_rx(rx, seed)));
+    spawner.spawn(unwrap!(can_tx(tx, node)));
+    spawner.spawn(unwrap!(can_rx(rx, node, seed)));
 }
 
 #[cortex_m_rt::entry]

@@ -14,7 +14,7 @@ const NAME: &str = "fuzz.log";
 fn decode(data: &[u8], json: bool) -> (Result<Summary, String>, Vec<u8>, Vec<u8>) {
     let mut out = Vec::new();
     let mut strict = Vec::new();
-    let r = decode_stream(data, NAME, json, &mut out, Some(&mut strict)).map_err(|e| {
+    let r = decode_stream(data, NAME, json, &mut out, Some(&mut strict), None).map_err(|e| {
         let msg = format!("{e:#}");
         let rest = msg
             .strip_prefix(NAME)

@@ -10,10 +10,12 @@
 
 use monitor::acknowledge::AckResult;
 use monitor::device::alarm::AlarmState;
-use monitor::protocol::auth::{acknowledge_frame, AckKey, KeyKind, DEVELOPMENT_KEY};
+use monitor::protocol::auth::{
+    acknowledge_frame, acknowledge_frame_for, AckKey, KeyKind, DEVELOPMENT_KEY,
+};
 use monitor::protocol::{
     AlarmFrame, CanFrame, ChallengeFrame, Decoder, DetailFrame, Encoder, HeartbeatFrame, Message,
-    ResetCause, StatusFrame,
+    Node, ResetCause, StatusFrame,
 };
 use monitor::LeakSet;
 use monitor::{Hypothesis, Verdict};
@@ -145,6 +147,26 @@ fn main() -> std::io::Result<()> {
         let frame = enc.encode(&msg);
         writeln!(out, "{}", line(&frame, &msg))?;
     }
+    // Another node's block: the same frames, moved.
+    let node = Node::new(3).expect("a node number");
+    let mut enc = Encoder::for_node(node);
+    for msg in messages() {
+        let frame = enc.encode(&msg);
+        let mut l = line(&frame, &msg);
+        l["node"] = node.number().into();
+        writeln!(out, "{l}")?;
+    }
+    let (key, challenge, _) = acknowledges()[1];
+    let frame = acknowledge_frame_for(node, &AckKey::installation(key), challenge, 0);
+    let msg = Decoder::for_node(node)
+        .decode(&frame)
+        .expect("node 3's acknowledge decodes")
+        .message;
+    let mut l = line(&frame, &msg);
+    let hex: String = key.iter().map(|b| format!("{b:02x}")).collect();
+    l["ack"] = serde_json::json!({"key": hex, "challenge": challenge});
+    l["node"] = node.number().into();
+    writeln!(out, "{l}")?;
     for (key, challenge, frame) in acknowledges() {
         let msg = Decoder::new()
             .decode(&frame)

@@ -5,12 +5,14 @@
 //! repeated counters are flagged. Lines are read with a length limit;
 //! CAN error frames, CAN FD and CAN XL frames and odd DLCs are skipped and
 //! counted (an error with `--strict`). Output is flushed after every
-//! frame, so `candump -L can0 | host-sim decode -` is live.
+//! frame, so `candump -L can0 | host-sim decode -` is live. Frames of
+//! every node's identifier block are decoded (each node's counters checked
+//! on their own), or of one node only ([`Nodes`]).
 
 use crate::recording::bounded::{read_line, Exceeded};
 use anyhow::{anyhow, bail, Result};
 use monitor::protocol::{
-    DecodeError, Decoder, E2eError, MessageKind, Received, Sequence, Signal, SignalValue,
+    DecodeError, Decoder, E2eError, MessageKind, Node, Received, Sequence, Signal, SignalValue,
 };
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -217,6 +219,10 @@ pub struct FrameRecord {
     /// DBC message name, if it is one of ours.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub message: Option<&'static str>,
+    /// Node number of the monitor that sent it (or the command's
+    /// addressee), if it is one of ours.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub node: Option<u8>,
     /// What the checks found.
     pub outcome: Outcome,
     /// E2E counter.
@@ -242,12 +248,39 @@ fn hex(data: &[u8]) -> String {
     data.iter().map(|b| format!("{b:02X}")).collect()
 }
 
-fn record(f: &LogFrame, decoder: &mut Decoder) -> FrameRecord {
+/// The decoders of the nodes decoded: every node, or one.
+#[derive(Clone, Debug)]
+pub struct Nodes {
+    only: Option<Node>,
+    decoders: [Decoder; Node::ALL.len()],
+}
+
+impl Nodes {
+    /// Decode the frames of `only` that node, or of every node.
+    pub fn new(only: Option<Node>) -> Self {
+        Self {
+            only,
+            decoders: Node::ALL.map(Decoder::for_node),
+        }
+    }
+
+    /// The kind, node and decoder of a frame's identifier, if decoded.
+    fn locate(&mut self, id: u32) -> Option<(MessageKind, Node, &mut Decoder)> {
+        let (kind, node) = MessageKind::locate(u16::try_from(id).ok()?)?;
+        if self.only.is_some_and(|n| n != node) {
+            return None;
+        }
+        Some((kind, node, &mut self.decoders[node.number() as usize]))
+    }
+}
+
+fn record(f: &LogFrame, nodes: &mut Nodes) -> FrameRecord {
     let mut r = FrameRecord {
         t: f.time.parse().unwrap_or(f64::NAN),
         iface: f.iface.clone(),
         id: f.id,
         message: None,
+        node: None,
         outcome: Outcome::Foreign,
         counter: None,
         lost: None,
@@ -264,7 +297,12 @@ fn record(f: &LogFrame, decoder: &mut Decoder) -> FrameRecord {
         r.text = "not a leak-monitor frame".into();
         return r;
     };
-    r.message = MessageKind::from_id(f.id as u16).map(MessageKind::name);
+    let Some((kind, node, decoder)) = nodes.locate(f.id) else {
+        r.text = "not a leak-monitor frame".into();
+        return r;
+    };
+    r.message = Some(kind.name());
+    r.node = Some(node.number());
     match decoder.decode(&frame) {
         Ok(Received {
             message,
@@ -483,7 +521,10 @@ impl std::fmt::Display for Summary {
 
 /// A line for people.
 pub fn format_record(r: &FrameRecord, time: &str) -> String {
-    let name = r.message.unwrap_or("-");
+    let name = match (r.message, r.node) {
+        (Some(m), Some(n)) if n != 0 => format!("{m}@{n}"),
+        (m, _) => m.unwrap_or("-").to_string(),
+    };
     let id = format!("{:03X}", r.id);
     let flag = match r.outcome {
         Outcome::CounterJump => format!(" COUNTER JUMP ({} lost)", r.lost.unwrap_or(0)),
@@ -511,19 +552,21 @@ pub fn decode_log(
     json: bool,
     out: &mut impl Write,
 ) -> Result<Summary> {
-    decode_stream(input, name, json, out, None)
+    decode_stream(input, name, json, out, None, None)
 }
 
 /// As [`decode_log`], flushing `out` after every frame; with `strict`
-/// (`Some(diagnostics)`), every skipped line is an error there naming it.
+/// (`Some(diagnostics)`), every skipped line is an error there naming it;
+/// with `only`, the frames of that node only (others are foreign).
 pub fn decode_stream(
     mut input: impl BufRead,
     name: &str,
     json: bool,
     out: &mut impl Write,
     mut strict: Option<&mut dyn Write>,
+    only: Option<Node>,
 ) -> Result<Summary> {
-    let mut decoder = Decoder::new();
+    let mut nodes = Nodes::new(only);
     let mut summary = Summary::default();
     let mut raw = Vec::new();
     for n in 1.. {
@@ -551,7 +594,7 @@ pub fn decode_stream(
             Ok(None) => continue,
             Err(e) => bail!("{name}:{n}: {e}: `{}`", line.trim()),
         };
-        let r = record(&frame, &mut decoder);
+        let r = record(&frame, &mut nodes);
         summary.add(&r);
         if json {
             serde_json::to_writer(&mut *out, &r)?;

@@ -160,3 +160,59 @@ fn a_malformed_line_is_an_error_naming_file_and_line() {
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("missing.log: cannot open"));
 }
+
+#[test]
+fn several_monitors_on_one_bus_are_decoded_by_node() {
+    use monitor::protocol::Node;
+    let dir = tempfile::tempdir().unwrap();
+    let mut a = Encoder::new();
+    let mut b = Encoder::for_node(Node::new(3).unwrap());
+    let mut log = String::new();
+    for k in 0..4 {
+        log += &line(1_000_000 + 100_000 * k, &a.encode(&status(100 + k as i16)));
+        log += &line(1_050_000 + 100_000 * k, &b.encode(&status(300 + k as i16)));
+    }
+    let path = dir.path().join("two.log");
+    std::fs::write(&path, &log).unwrap();
+    let path = path.to_str().unwrap();
+
+    // Every node, each node's counters on their own: no counter jumps.
+    let out = host_sim(&["decode", "--json", "--strict", path]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let rows: Vec<serde_json::Value> = String::from_utf8(out.stdout)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(rows.len(), 8);
+    for (i, r) in rows.iter().enumerate() {
+        let (node, id) = if i % 2 == 0 { (0, 0x301) } else { (3, 0x361) };
+        assert_eq!(r["node"], node, "{r}");
+        assert_eq!(r["id"], id, "{r}");
+        assert_eq!(r["outcome"], "ok", "{r}");
+        assert_eq!(r["message"], "LM_Status", "{r}");
+    }
+    let text = String::from_utf8(host_sim(&["decode", path]).stdout).unwrap();
+    assert!(text.contains("LM_Status@3"), "{text}");
+
+    // One node: the other's frames are foreign.
+    let out = host_sim(&["decode", "--json", "--node", "3", path]);
+    let text = String::from_utf8(out.stdout).unwrap();
+    let ok = text
+        .lines()
+        .filter(|l| l.contains("\"outcome\":\"ok\""))
+        .count();
+    assert_eq!(ok, 4, "{text}");
+    assert!(text
+        .lines()
+        .all(|l| l.contains("\"node\":3") || !l.contains("\"node\"")));
+
+    // Not a node.
+    let out = host_sim(&["decode", "--node", "8", path]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("not a node number"));
+}

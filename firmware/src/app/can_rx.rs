@@ -20,7 +20,7 @@ use embassy_futures::select::{select3, Either3};
 use embassy_time::{Duration, Instant, Timer};
 use monitor::protocol::auth::KeyKind;
 use monitor::protocol::gate::{AckGate, GateOutcome};
-use monitor::protocol::{ChallengeFrame, Message};
+use monitor::protocol::{ChallengeFrame, Message, Node};
 
 use super::shared::Shared;
 use crate::board::{CanReceive, CanRxError};
@@ -28,10 +28,12 @@ use crate::board::{CanReceive, CanRxError};
 /// The challenge frame's refresh period.
 pub const CHALLENGE_PERIOD: Duration = Duration::from_millis(1000);
 
-/// Run the receiver for ever. `seed`: differs at every boot (hardware
-/// RNG): the challenges of this boot are derived from it.
-pub async fn run<R: CanReceive>(mut rx: R, shared: &Shared, seed: u64) -> ! {
-    let mut gate = AckGate::new(&crate::ack_key::ACK_KEY, seed, Instant::now().as_millis());
+/// Run the receiver for ever, for `node`'s command frame. `seed`: differs
+/// at every boot (hardware RNG): the challenges of this boot are derived
+/// from it.
+pub async fn run<R: CanReceive>(mut rx: R, node: Node, shared: &Shared, seed: u64) -> ! {
+    let now_ms = Instant::now().as_millis();
+    let mut gate = AckGate::for_node(&crate::ack_key::ACK_KEY, node, seed, now_ms);
     if gate.key_kind() == KeyKind::Development {
         defmt::warn!("CAN: acknowledges are checked with the PUBLIC development key");
     }

@@ -8,7 +8,7 @@
 use core::sync::atomic::Ordering;
 
 use embassy_time::{with_timeout, Duration};
-use monitor::protocol::Encoder;
+use monitor::protocol::{Encoder, Node};
 
 use super::shared::Shared;
 use crate::board::CanTransmit;
@@ -17,9 +17,9 @@ use crate::board::CanTransmit;
 /// 500 kbit/s).
 pub const TX_TIMEOUT: Duration = Duration::from_millis(20);
 
-/// Run the transmitter for ever.
-pub async fn run<T: CanTransmit>(mut tx: T, shared: &Shared) -> ! {
-    let mut encoder = Encoder::new();
+/// Run the transmitter for ever, with `node`'s identifiers.
+pub async fn run<T: CanTransmit>(mut tx: T, node: Node, shared: &Shared) -> ! {
+    let mut encoder = Encoder::for_node(node);
     let mut failing = false;
     loop {
         shared.wait_for_messages().await;

@@ -51,13 +51,13 @@ macro_rules! app_tasks {
         }
 
         #[embassy_executor::task]
-        async fn can_tx(tx: $can_tx) {
-            $crate::app::can_tx::run(tx, &$shared).await
+        async fn can_tx(tx: $can_tx, node: ::monitor::protocol::Node) {
+            $crate::app::can_tx::run(tx, node, &$shared).await
         }
 
         #[embassy_executor::task]
-        async fn can_rx(rx: $can_rx, challenge_seed: u64) {
-            $crate::app::can_rx::run(rx, &$shared, challenge_seed).await
+        async fn can_rx(rx: $can_rx, node: ::monitor::protocol::Node, challenge_seed: u64) {
+            $crate::app::can_rx::run(rx, node, &$shared, challenge_seed).await
         }
     };
 }

@@ -1,5 +1,5 @@
-//! bxCAN1 at 500 kbit/s on PB8/PB9. Receive filter: the command frame
-//! only. Automatic bus-off recovery is on (embassy sets ABOM), automatic
+//! bxCAN1 at 500 kbit/s on PB8/PB9. Receive filter: the node's command
+//! frame only. Automatic bus-off recovery is on (embassy sets ABOM), automatic
 //! retransmission too: a frame nobody acknowledges stays in its mailbox
 //! until the application's timeout aborts it.
 
@@ -13,7 +13,7 @@ use embassy_stm32::peripherals::{CAN1, PB8, PB9};
 use embassy_stm32::rcc::frequency;
 use embassy_stm32::{bind_interrupts, Peri};
 use embassy_time::{with_timeout, Duration};
-use monitor::protocol::{CanFrame, MessageKind, BITRATE_BPS};
+use monitor::protocol::{CanFrame, MessageKind, Node, BITRATE_BPS};
 use static_cell::StaticCell;
 
 use firmware::board::{CanReceive, CanRxError, CanTransmit, CanTxError};
@@ -28,14 +28,16 @@ bind_interrupts!(struct Irqs {
 /// The driver lives for ever (dropping it would reset the controller).
 static CAN: StaticCell<Can<'static>> = StaticCell::new();
 
-/// Set up CAN1 and wait for the bus to be idle; returns the two halves.
+/// Set up CAN1 for `node`'s command frame and wait for the bus to be
+/// idle; returns the two halves.
 pub async fn start(
     can: Peri<'static, CAN1>,
     rx: Peri<'static, PB8>,
     tx: Peri<'static, PB9>,
+    node: Node,
 ) -> (Transmitter, Receiver) {
     let can = CAN.init(Can::new(can, rx, tx, Irqs));
-    let command = StandardId::new(MessageKind::Command.id()).unwrap_or(StandardId::ZERO);
+    let command = StandardId::new(MessageKind::Command.id_at(node)).unwrap_or(StandardId::ZERO);
     can.modify_filters().enable_bank(
         0,
         Fifo::Fifo0,

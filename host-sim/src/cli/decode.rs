@@ -2,6 +2,7 @@
 
 use anyhow::{Context, Result};
 use host_sim::decode::decode_stream;
+use monitor::protocol::Node;
 use std::io::{BufRead, Write};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -20,6 +21,19 @@ pub struct Args {
     /// each named on stderr).
     #[arg(long)]
     strict: bool,
+    /// Decode only the frames of the monitor with this node number
+    /// (0..=7, the parameters' `can.node`); without it every node's
+    /// frames are decoded, and a node other than 0 is shown after the
+    /// name (`LM_Status@3`).
+    #[arg(long, value_parser = parse_node)]
+    node: Option<Node>,
+}
+
+fn parse_node(s: &str) -> Result<Node, String> {
+    s.parse::<u32>()
+        .ok()
+        .and_then(Node::new)
+        .ok_or_else(|| format!("`{s}` is not a node number (0..={})", Node::MAX))
 }
 
 /// Decode a candump log; the summary goes to stderr.
@@ -43,7 +57,7 @@ fn decode(input: impl BufRead, name: &str, a: &Args) -> Result<host_sim::decode:
     let mut out = std::io::BufWriter::new(super::stdout());
     let mut stderr = std::io::stderr();
     let strict = a.strict.then_some(&mut stderr as &mut dyn Write);
-    let summary = decode_stream(input, name, a.json, &mut out, strict)?;
+    let summary = decode_stream(input, name, a.json, &mut out, strict, a.node)?;
     out.flush()?;
     Ok(summary)
 }

@@ -494,6 +494,18 @@ params_struct! {
     }
 }
 
+params_struct! {
+    section "can";
+    /// The monitor on the CAN bus.
+    pub struct CanConfig {
+        /// Node number on a bus shared by several monitors: moves the whole
+        /// identifier block by 0x20 per node (`protocol::Node`); 0 keeps
+        /// the identifiers of the DBC.
+        pub node: u32 = 0,
+            in (0.0 ..= 7.0, ""),
+    }
+}
+
 /// Everything the monitor needs to know about one installation.
 #[derive(Clone, Debug, PartialEq, Default)]
 #[cfg_attr(feature = "serde", derive(Serialize, Deserialize))]
@@ -519,6 +531,8 @@ pub struct Params {
     pub filter: FilterTuning,
     /// Alarm thresholds.
     pub alarm: AlarmConfig,
+    /// The CAN bus.
+    pub can: CanConfig,
 }
 
 /// Operating region of a valve command for `[baseline]`: 0 retracting
@@ -535,6 +549,12 @@ pub fn operating_region(u: f32, hold_band: (f32, f32)) -> usize {
 }
 
 impl Params {
+    /// The node number on the CAN bus (validated: 0..=7; an unvalidated
+    /// set out of range gives node 0).
+    pub fn node(&self) -> crate::protocol::Node {
+        crate::protocol::Node::new(self.can.node).unwrap_or_default()
+    }
+
     /// The valve commands of the holding region: null ± dead zone.
     pub fn hold_band(&self) -> (f32, f32) {
         let v = &self.valve;
@@ -556,6 +576,7 @@ impl Params {
         sensors: Sensors::NOMINAL,
         filter: FilterTuning::NOMINAL,
         alarm: AlarmConfig::NOMINAL,
+        can: CanConfig::NOMINAL,
     };
 
     /// The reference thesis rig (ch. 5–6).
@@ -565,7 +586,7 @@ impl Params {
 
     /// The bounds table: every section's fields with their physical
     /// bounds, section by section as in the TOML file.
-    pub const BOUNDS: [&'static [FieldBounds]; 10] = [
+    pub const BOUNDS: [&'static [FieldBounds]; 11] = [
         Cylinder::BOUNDS,
         Pantograph::BOUNDS,
         Valve::BOUNDS,
@@ -576,6 +597,7 @@ impl Params {
         Sensors::BOUNDS,
         FilterTuning::BOUNDS,
         AlarmConfig::BOUNDS,
+        CanConfig::BOUNDS,
     ];
 
     /// Every field's bounds (see [`Params::BOUNDS`]).

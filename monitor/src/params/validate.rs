@@ -65,6 +65,7 @@ impl Params {
         self.sensors.check_bounds()?;
         self.filter.check_bounds()?;
         self.alarm.check_bounds()?;
+        self.can.check_bounds()?;
         self.check_relations()?;
         self.check_load()
     }

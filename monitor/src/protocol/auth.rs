@@ -35,7 +35,7 @@ use hmac::{Hmac, KeyInit, Mac};
 use sha2::Sha256;
 
 use super::command::{Command, CommandFrame};
-use super::{e2e, CanFrame, MessageKind, FRAME_LEN};
+use super::{e2e, CanFrame, MessageKind, Node, FRAME_LEN};
 
 /// Key length, bytes (128 bits).
 pub const KEY_LEN: usize = 16;
@@ -172,7 +172,13 @@ impl AckKey {
 /// (the command frame's identifier, little-endian), the command code, the
 /// E2E counter and the challenge (little-endian).
 pub fn mac_message(command: Command, counter: u8, challenge: u32) -> [u8; 11] {
-    let id = MessageKind::Command.id().to_le_bytes();
+    mac_message_for(MessageKind::Command.id(), command, counter, challenge)
+}
+
+/// [`mac_message`] for the command frame with identifier `data_id` (a
+/// node's, see [`Node`](super::Node)).
+pub fn mac_message_for(data_id: u16, command: Command, counter: u8, challenge: u32) -> [u8; 11] {
+    let id = data_id.to_le_bytes();
     let c = challenge.to_le_bytes();
     [
         b'L',
@@ -195,6 +201,8 @@ pub fn mac_message(command: Command, counter: u8, challenge: u32) -> [u8; 11] {
 pub struct Authenticator {
     mac: Hmac<Sha256>,
     kind: KeyKind,
+    /// The command frame's identifier (the node's), in every MAC input.
+    data_id: u16,
 }
 
 impl fmt::Debug for Authenticator {
@@ -204,14 +212,25 @@ impl fmt::Debug for Authenticator {
 }
 
 impl Authenticator {
-    /// An authenticator for `key`.
+    /// An authenticator for `key`, for node 0's command frame.
     pub fn new(key: &AckKey) -> Self {
+        Self::for_node(key, Node::DEFAULT)
+    }
+
+    /// An authenticator for `key`, for `node`'s command frame.
+    pub fn for_node(key: &AckKey, node: Node) -> Self {
         Self {
             // HMAC takes keys of any length: this cannot fail.
             mac: <Hmac<Sha256> as KeyInit>::new_from_slice(&key.bytes)
                 .unwrap_or_else(|_| unreachable!()),
             kind: key.kind,
+            data_id: MessageKind::Command.id_at(node),
         }
+    }
+
+    /// The command frame's identifier this authenticator is for.
+    pub const fn data_id(&self) -> u16 {
+        self.data_id
     }
 
     /// Where the key came from.
@@ -224,7 +243,7 @@ impl Authenticator {
         let full = self
             .mac
             .clone()
-            .chain_update(mac_message(command, counter, challenge))
+            .chain_update(mac_message_for(self.data_id, command, counter, challenge))
             .finalize()
             .into_bytes();
         let mut t = [0u8; MAC_LEN];
@@ -239,7 +258,7 @@ impl Authenticator {
             && self
                 .mac
                 .clone()
-                .chain_update(mac_message(command, counter, challenge))
+                .chain_update(mac_message_for(self.data_id, command, counter, challenge))
                 .verify_truncated_left(tag)
                 .is_ok()
     }
@@ -390,16 +409,22 @@ impl Challenger {
 /// The E2E-protected acknowledge frame a controller holding `key` sends to
 /// answer `challenge`, with E2E `counter` (0..=14).
 pub fn acknowledge_frame(key: &AckKey, challenge: u32, counter: u8) -> CanFrame {
+    acknowledge_frame_for(Node::DEFAULT, key, challenge, counter)
+}
+
+/// [`acknowledge_frame`] for the monitor at `node`.
+pub fn acknowledge_frame_for(node: Node, key: &AckKey, challenge: u32, counter: u8) -> CanFrame {
     let command = Command::AcknowledgeAlarm;
     let counter = counter.min(e2e::COUNTER_MAX);
     let frame = CommandFrame {
         command,
-        mac: Authenticator::new(key).tag(command, counter, challenge),
+        mac: Authenticator::for_node(key, node).tag(command, counter, challenge),
     };
     let mut data = [0u8; FRAME_LEN];
     frame.write(&mut data);
-    e2e::protect(MessageKind::Command.id(), &mut data, counter);
-    CanFrame::new(MessageKind::Command.id(), &data).unwrap_or_else(|| unreachable!())
+    let id = MessageKind::Command.id_at(node);
+    e2e::protect(id, &mut data, counter);
+    CanFrame::new(id, &data).unwrap_or_else(|| unreachable!())
 }
 
 #[cfg(test)]

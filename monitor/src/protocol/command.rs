@@ -104,7 +104,8 @@ impl CommandFrame {
 /// frame, or a few repeats) always gets through on a quiet bus.
 pub const MIN_CHECK_INTERVAL_MS: u64 = 20;
 
-/// The P01 check of the command frame. Commands are sporadic (one frame
+/// The P01 check of node 0's command frame (another node's has its own
+/// identifier as Data ID: [`CommandReceiver::new`]). Commands are sporadic (one frame
 /// per operator action), so a gap in the counter says little: a wrong
 /// sequence is acted on, a repeated counter is not. `MaxDeltaCounterInit`
 /// 1 keeps the status informative (OK for the usual next counter).
@@ -195,12 +196,17 @@ pub struct CommandReceiver {
 }
 
 impl CommandReceiver {
-    /// A receiver for commands authenticated with `auth`'s key, that has
-    /// seen no frame yet.
+    /// A receiver for commands authenticated with `auth`'s key, on the
+    /// command frame `auth` is for (its node's), that has seen no frame
+    /// yet.
     pub const fn new(auth: Authenticator) -> Self {
+        let p01 = P01Config {
+            data_id: auth.data_id(),
+            ..COMMAND_P01
+        };
         Self {
             auth,
-            e2e: Receiver::new(COMMAND_P01, COMMAND_SM),
+            e2e: Receiver::new(p01, COMMAND_SM),
             last_check_ms: None,
         }
     }
@@ -220,8 +226,9 @@ impl CommandReceiver {
         challenges: Challenges,
     ) -> Result<Authentic, CommandRejected> {
         let kind = MessageKind::Command;
+        let data_id = self.auth.data_id();
         let is_command = !frame.is_remote_frame()
-            && matches!(frame.id(), embedded_can::Id::Standard(id) if id.as_raw() == kind.id());
+            && matches!(frame.id(), embedded_can::Id::Standard(id) if id.as_raw() == data_id);
         if !is_command {
             return Err(CommandRejected::NotACommand);
         }
@@ -233,7 +240,7 @@ impl CommandReceiver {
                 len: frame.data().len() as u8,
             }));
         };
-        let counter = match e2e::check(kind.id(), data) {
+        let counter = match e2e::check(data_id, data) {
             Ok(c) => c,
             Err(error) => {
                 // The P01 check classifies it (WRONGCRC → ERROR) without

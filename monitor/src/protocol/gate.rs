@@ -19,6 +19,7 @@
 use super::auth::{AckKey, Authenticator, Challenger, Challenges, KeyKind};
 use super::challenge::ChallengeFrame;
 use super::command::{Authentic, CommandReceiver};
+use super::Node;
 use crate::decision::acknowledge::{AckEvent, AckPolicy, AckResult};
 
 /// What a received frame is.
@@ -45,9 +46,14 @@ impl AckGate {
     /// The gate at boot (`now_ms` on any monotonic ms clock), its first
     /// challenge derived from `seed` (different at every boot).
     pub fn new(key: &AckKey, seed: u64, now_ms: u64) -> Self {
+        Self::for_node(key, Node::DEFAULT, seed, now_ms)
+    }
+
+    /// [`Self::new`] for the monitor at `node` (its command frame).
+    pub fn for_node(key: &AckKey, node: Node, seed: u64, now_ms: u64) -> Self {
         Self {
             challenger: Challenger::new(key, seed, now_ms),
-            receiver: CommandReceiver::new(Authenticator::new(key)),
+            receiver: CommandReceiver::new(Authenticator::for_node(key, node)),
             raised_seen: 0,
         }
     }
@@ -131,7 +137,7 @@ mod tests {
     use crate::decision::acknowledge::AckRejected;
     use crate::protocol::auth::{acknowledge_frame, CHALLENGE_LIFETIME_MS};
     use crate::protocol::command::MIN_CHECK_INTERVAL_MS;
-    use crate::protocol::{e2e, CanFrame};
+    use crate::protocol::{e2e, CanFrame, MessageKind};
 
     fn key() -> AckKey {
         AckKey::installation(*b"installation-key")
@@ -160,6 +166,45 @@ mod tests {
             }) => r,
             other => panic!("not rejected: {other:?}"),
         }
+    }
+
+    #[test]
+    fn an_acknowledge_reaches_only_the_node_it_was_made_for() {
+        use crate::protocol::auth::acknowledge_frame_for;
+        let node = |n| Node::new(n).unwrap();
+        let mut gates: [AckGate; 3] =
+            core::array::from_fn(|n| AckGate::for_node(&key(), node(n as u32), 7, 0));
+        // Node 2's frame, answering node 2's challenge.
+        let f = acknowledge_frame_for(node(2), &key(), gates[2].challenges().current, 0);
+        assert_eq!(f.id(), 0x350);
+        assert!(matches!(
+            gates[0].receive(&f, 0, 0),
+            GateOutcome::NotACommand
+        ));
+        assert!(matches!(
+            gates[1].receive(&f, 0, 0),
+            GateOutcome::NotACommand
+        ));
+        assert!(matches!(
+            gates[2].receive(&f, 0, 0),
+            GateOutcome::Authentic(_)
+        ));
+        // Node 0's (same key, same challenge) re-addressed to node 1: the
+        // identifier is in the CRC and in the MAC.
+        let f0 = acknowledge_frame_for(node(0), &key(), gates[1].challenges().current, 1);
+        let moved = CanFrame::new(MessageKind::Command.id_at(node(1)), f0.data()).unwrap();
+        assert_eq!(
+            rejected(gates[1].receive(&moved, 10, 10)),
+            AckRejected::Malformed
+        );
+        let mut data = [0u8; 8];
+        data.copy_from_slice(f0.data());
+        e2e::protect(MessageKind::Command.id_at(node(1)), &mut data, 1);
+        let resealed = CanFrame::new(MessageKind::Command.id_at(node(1)), &data).unwrap();
+        assert_eq!(
+            rejected(gates[1].receive(&resealed, 20, 20)),
+            AckRejected::BadMac
+        );
     }
 
     #[test]

@@ -16,6 +16,13 @@
 //! | 0x304 | [`ChallengeFrame`] | at once when it changes, and every 1 s |
 //! | 0x310 | [`CommandFrame`] | received: acknowledge a latched alarm, authenticated over the current challenge ([`auth`]) |
 //!
+//! The identifiers are node 0's. On a bus shared by several monitors each
+//! has a node number ([`Node`], 0..=7, from the parameters' `can.node`)
+//! that moves its whole block by `0x20 · node` (node 3: 0x360–0x364 and
+//! the command at 0x370); the E2E Data ID and the acknowledge MAC use the
+//! moved identifier, so a frame meant for one node fails every check on
+//! another.
+//!
 //! Message structs hold each field as an integer in its wire unit (named
 //! in the field), so encode → decode is exact; the conversions from the
 //! monitor's floating-point [`Status`](crate::Status) round and saturate.
@@ -48,6 +55,45 @@ pub const BITRATE_BPS: u32 = 500_000;
 
 /// Data bytes in every frame.
 pub const FRAME_LEN: usize = 8;
+
+/// A monitor's node number on a shared bus: moves its identifier block.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Node(u8);
+
+impl Node {
+    /// The default node: the identifiers of the table above.
+    pub const DEFAULT: Node = Node(0);
+    /// Highest node number.
+    pub const MAX: u8 = 7;
+    /// Identifier distance between two nodes' blocks.
+    pub const STRIDE: u16 = 0x20;
+    /// Every node, in number order.
+    pub const ALL: [Node; Self::MAX as usize + 1] = [
+        Node(0),
+        Node(1),
+        Node(2),
+        Node(3),
+        Node(4),
+        Node(5),
+        Node(6),
+        Node(7),
+    ];
+
+    /// Node `number`, if it is one (0..=[`Self::MAX`]).
+    pub const fn new(number: u32) -> Option<Node> {
+        if number <= Self::MAX as u32 {
+            Some(Node(number as u8))
+        } else {
+            None
+        }
+    }
+
+    /// The node's number.
+    pub const fn number(self) -> u8 {
+        self.0
+    }
+}
 
 /// The frames of the protocol, in identifier (= bus priority) order.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -93,9 +139,23 @@ impl MessageKind {
         }
     }
 
-    /// The kind of an identifier, if it is one of ours.
+    /// 11-bit CAN identifier at `node` (see [`Node`]); also the E2E Data
+    /// ID.
+    pub const fn id_at(self, node: Node) -> u16 {
+        self.id() + node.0 as u16 * Node::STRIDE
+    }
+
+    /// The kind of a node-0 identifier, if it is one of ours.
     pub fn from_id(id: u16) -> Option<Self> {
         Self::ALL.into_iter().find(|k| k.id() == id)
+    }
+
+    /// The kind and node of an identifier of any node's block.
+    pub fn locate(id: u16) -> Option<(Self, Node)> {
+        let base = Self::Alarm.id();
+        let offset = id.checked_sub(base)?;
+        let node = Node::new(u32::from(offset / Node::STRIDE))?;
+        Some((Self::from_id(base + offset % Node::STRIDE)?, node))
     }
 
     /// Message name in the DBC file.
@@ -294,13 +354,20 @@ pub enum DecodeError {
 /// Builds protected frames: one rolling counter per frame kind.
 #[derive(Clone, Debug, Default)]
 pub struct Encoder {
+    node: Node,
     counters: [e2e::Counter; MessageKind::COUNT],
 }
 
 impl Encoder {
-    /// An encoder whose counters all start at 0.
+    /// An encoder for node 0 whose counters all start at 0.
     pub const fn new() -> Self {
+        Self::for_node(Node::DEFAULT)
+    }
+
+    /// An encoder for `node`'s identifiers whose counters all start at 0.
+    pub const fn for_node(node: Node) -> Self {
         Self {
+            node,
             counters: [e2e::Counter::new(); MessageKind::COUNT],
         }
     }
@@ -311,9 +378,10 @@ impl Encoder {
         let mut data = [0u8; FRAME_LEN];
         msg.write(&mut data);
         let counter = self.counters[kind as usize].next_value();
-        e2e::protect(kind.id(), &mut data, counter);
+        let id = kind.id_at(self.node);
+        e2e::protect(id, &mut data, counter);
         CanFrame {
-            id: kind.id(),
+            id,
             len: FRAME_LEN as u8,
             data,
         }
@@ -332,16 +400,25 @@ pub struct Received {
     pub sequence: Sequence,
 }
 
-/// Checks and decodes received frames; tracks one counter per kind.
+/// Checks and decodes received frames of one node; tracks one counter per
+/// kind.
 #[derive(Clone, Debug, Default)]
 pub struct Decoder {
+    node: Node,
     checks: [e2e::CounterCheck; MessageKind::COUNT],
 }
 
 impl Decoder {
-    /// A decoder that has seen no frame yet.
+    /// A decoder for node 0 that has seen no frame yet.
     pub const fn new() -> Self {
+        Self::for_node(Node::DEFAULT)
+    }
+
+    /// A decoder for `node`'s frames (others are [`DecodeError::UnknownId`])
+    /// that has seen no frame yet.
+    pub const fn for_node(node: Node) -> Self {
         Self {
+            node,
             checks: [e2e::CounterCheck::new(); MessageKind::COUNT],
         }
     }
@@ -355,7 +432,10 @@ impl Decoder {
             embedded_can::Id::Standard(s) if !frame.is_remote_frame() => s.as_raw(),
             _ => return Err(DecodeError::NotADataFrame),
         };
-        let kind = MessageKind::from_id(id).ok_or(DecodeError::UnknownId(id))?;
+        let kind = match MessageKind::locate(id) {
+            Some((kind, node)) if node == self.node => kind,
+            _ => return Err(DecodeError::UnknownId(id)),
+        };
         let data: &[u8; FRAME_LEN] = frame.data().try_into().map_err(|_| DecodeError::Length {
             kind,
             len: frame.data().len() as u8,

@@ -507,3 +507,44 @@ fn outbox_sends_the_alarm_before_the_status() {
     assert_eq!(o.take_next(), Some(status));
     assert_eq!(o.take_next(), None);
 }
+
+#[test]
+fn a_node_number_moves_the_whole_block() {
+    let n3 = Node::new(3).unwrap();
+    assert_eq!(Node::new(8), None);
+    assert_eq!(MessageKind::Alarm.id_at(n3), 0x360);
+    assert_eq!(MessageKind::Challenge.id_at(n3), 0x364);
+    assert_eq!(MessageKind::Command.id_at(n3), 0x370);
+    for node in Node::ALL {
+        for kind in MessageKind::ALL {
+            assert_eq!(MessageKind::locate(kind.id_at(node)), Some((kind, node)));
+        }
+    }
+    assert_eq!(MessageKind::Command.id_at(Node::new(7).unwrap()), 0x3F0);
+    for id in [0x000, 0x2FF, 0x305, 0x30F, 0x311, 0x31F, 0x400, 0x7FF] {
+        assert_eq!(MessageKind::locate(id), None, "{id:#x}");
+    }
+}
+
+#[test]
+fn a_decoder_takes_only_its_nodes_frames() {
+    let n5 = Node::new(5).unwrap();
+    let mut enc = Encoder::for_node(n5);
+    for msg in one_of_each() {
+        let f = enc.encode(&msg);
+        assert_eq!(f.id(), msg.kind().id_at(n5));
+        assert_eq!(Decoder::for_node(n5).decode(&f).unwrap().message, msg);
+        assert_eq!(
+            Decoder::new().decode(&f),
+            Err(DecodeError::UnknownId(f.id()))
+        );
+        // Node 0's frame under node 5's identifier fails the CRC (the
+        // Data ID is the identifier).
+        let f0 = Encoder::new().encode(&msg);
+        let moved = CanFrame::new(f.id(), f0.data()).unwrap();
+        assert!(matches!(
+            Decoder::for_node(n5).decode(&moved),
+            Err(DecodeError::E2e { .. })
+        ));
+    }
+}

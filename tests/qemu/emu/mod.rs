@@ -35,7 +35,7 @@ use golden::params::golden_params;
 use heapless::Vec;
 use monitor::device::Estimator;
 use monitor::protocol::auth::{acknowledge_frame, Challenger};
-use monitor::protocol::{CanFrame, ResetCause};
+use monitor::protocol::{CanFrame, Node, ResetCause};
 use qemu_tests::counter::{self, Counter};
 use qemu_tests::{exit, println};
 
@@ -279,8 +279,12 @@ fn run_with(case: &'static EmuCase, fault: Option<DeviceFault>) -> ! {
     let self_test = ScriptedSelfTest { fault: inject };
     let supervisor = supervisor(RecordingWatchdog, &RELAY, RecordingLed::new(), self_test);
     low.spawn(supervisor.expect("supervisor task"));
-    low.spawn(can_tx(RecordingCanTx).expect("CAN transmit task"));
-    let can_rx = can_rx(ScriptedCanRx::new(script.as_slice()), CHALLENGE_SEED);
+    low.spawn(can_tx(RecordingCanTx, Node::DEFAULT).expect("CAN transmit task"));
+    let can_rx = can_rx(
+        ScriptedCanRx::new(script.as_slice()),
+        Node::DEFAULT,
+        CHALLENGE_SEED,
+    );
     low.spawn(can_rx.expect("CAN receive task"));
     match inject {
         None => low.spawn(checker(case, t0, expect).expect("checker task")),
