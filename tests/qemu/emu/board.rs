@@ -87,8 +87,17 @@ impl SampleSource for ReplayAdc {
     }
 }
 
-/// The board's background self-test: finds nothing, or, when a test
-/// injects one, a device fault from a given time on.
+/// VREFINT's code on a healthy board: VDDA = 3.3 V and the typical
+/// VREFINT of 1.21 V, 12 bits (1.21 / 3.3 × 4095 = 1501.5).
+pub const VREFINT_NOMINAL: u16 = 1502;
+
+/// LSI cycles per second of sample time on a healthy board: the LSI's
+/// typical 32 kHz.
+pub const LSI_NOMINAL: u32 = 32_000;
+
+/// The board's background self-test and diagnostic readings: finds
+/// nothing and reads a healthy board's values, or, when a test injects
+/// one, a device fault from a given time on.
 pub struct ScriptedSelfTest {
     /// The fault and when it appears.
     pub fault: Option<(Instant, DeviceFault)>,
@@ -99,6 +108,18 @@ impl SelfTest for ScriptedSelfTest {
         self.fault
             .filter(|(at, _)| Instant::now() >= *at)
             .map(|(_, f)| f)
+    }
+
+    fn vrefint_code(&mut self) -> u16 {
+        VREFINT_NOMINAL
+    }
+
+    fn lsi_cycles_per_window(&mut self) -> Option<u32> {
+        Some(LSI_NOMINAL)
+    }
+
+    fn clock_failed(&self) -> bool {
+        false
     }
 }
 
