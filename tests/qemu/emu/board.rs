@@ -97,10 +97,14 @@ pub const LSI_NOMINAL: u32 = 32_000;
 
 /// The board's background self-test and diagnostic readings: finds
 /// nothing and reads a healthy board's values, or, when a test injects
-/// one, a device fault from a given time on.
+/// one, a device fault or a VREFINT code from a given time on. Every
+/// reading the supervisor takes is recorded (`record::Log::vrefint`,
+/// `record::Log::lsi`).
 pub struct ScriptedSelfTest {
     /// The fault and when it appears.
     pub fault: Option<(Instant, DeviceFault)>,
+    /// The VREFINT code and when it replaces [`VREFINT_NOMINAL`].
+    pub vrefint: Option<(Instant, u16)>,
 }
 
 impl SelfTest for ScriptedSelfTest {
@@ -111,10 +115,16 @@ impl SelfTest for ScriptedSelfTest {
     }
 
     fn vrefint_code(&mut self) -> u16 {
-        VREFINT_NOMINAL
+        let now = Instant::now();
+        record::with(|l| l.vrefint.take(now));
+        self.vrefint
+            .filter(|(at, _)| now >= *at)
+            .map_or(VREFINT_NOMINAL, |(_, code)| code)
     }
 
     fn lsi_cycles_per_window(&mut self) -> Option<u32> {
+        let now = Instant::now();
+        record::with(|l| l.lsi.take(now));
         Some(LSI_NOMINAL)
     }
 
