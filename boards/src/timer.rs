@@ -22,9 +22,16 @@ pub const fn timer_period(timer_hz: u32, rate_hz: u32) -> Option<(u16, u16)> {
     Some((psc as u16, arr as u16))
 }
 
+/// Timer clock ticks per update of a timer set to `(psc, arr)`:
+/// (PSC + 1) × (ARR + 1). The true period of what the timer paces, on its
+/// own clock (e.g. the ADC trigger's scan period).
+pub const fn period_ticks(psc: u16, arr: u16) -> u64 {
+    (psc as u64 + 1) * (arr as u64 + 1)
+}
+
 #[cfg(test)]
 mod tests {
-    use super::timer_period;
+    use super::{period_ticks, timer_period};
 
     fn rate(timer_hz: u32, (psc, arr): (u16, u16)) -> f64 {
         timer_hz as f64 / ((psc as f64 + 1.0) * (arr as f64 + 1.0))
@@ -52,6 +59,23 @@ mod tests {
                 got >= rate_hz as f64 && got < rate_hz as f64 * 1.001,
                 "{got}"
             );
+        }
+    }
+
+    #[test]
+    fn period_ticks_are_the_timers_true_period() {
+        assert_eq!(period_ticks(0, 20_999), 21_000);
+        assert_eq!(period_ticks(u16::MAX, u16::MAX), 1 << 32);
+        for (timer_hz, rate_hz) in [(84_000_000, 4_000), (84_000_000, 7), (1_000_000, 999)] {
+            let Some((psc, arr)) = timer_period(timer_hz, rate_hz) else {
+                panic!("{timer_hz} / {rate_hz}");
+            };
+            let ticks = period_ticks(psc, arr);
+            assert!(
+                ticks <= u64::from(timer_hz / rate_hz),
+                "never slower than asked"
+            );
+            assert_eq!(rate(timer_hz, (psc, arr)), timer_hz as f64 / ticks as f64);
         }
     }
 

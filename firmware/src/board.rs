@@ -36,10 +36,33 @@ pub trait RelayOutput: Sync {
 }
 
 /// The board's background self-test (e.g. the program image's checksum,
-/// a chunk at a time), stepped by the supervisor every check period.
+/// a chunk at a time), stepped by the supervisor every check period, and
+/// the readings behind the device diagnostics that the supervisor checks
+/// (`monitor::device::diagnostics::check`) at its own pace.
 pub trait SelfTest {
     /// One step; the device fault it found, if any.
     fn step(&mut self) -> Option<monitor::device::diagnostics::DeviceFault>;
+
+    /// Convert the chip's internal reference VREFINT once and return its
+    /// ADC code (12 bits, right-aligned; VDDA = 3.3 V reads about 1502),
+    /// or 0 when the conversion did not complete in time. Must not disturb
+    /// the sampling of the inputs. Called every few check periods
+    /// (`app::supervisor::REFERENCE_EVERY`).
+    fn vrefint_code(&mut self) -> u16;
+
+    /// Measure the independent low-speed oscillator (LSI) against the
+    /// sample clock: LSI cycles per window of sample time
+    /// (`monitor::device::diagnostics::clock::WINDOW_US`, 1 s; 17 000 to
+    /// 47 000 on a healthy STM32F405). 0 when the LSI shows no edge at all;
+    /// `None` when no valid measurement could be taken this time (tried
+    /// again at the next window). Called once per window
+    /// (`app::supervisor::CLOCK_EVERY`), the first time one window after
+    /// start.
+    fn lsi_cycles_per_window(&mut self) -> Option<u32>;
+
+    /// Has the clock security system tripped since boot (the crystal
+    /// failed)? Read every check period.
+    fn clock_failed(&self) -> bool;
 }
 
 /// A CAN transmit error.

@@ -27,7 +27,8 @@ use monitor::device::Estimator;
 use static_cell::StaticCell;
 use stm32::adc::AdcSampler;
 use stm32::can::{Receiver, Transmitter};
-use stm32::diagnostics::ImageCheck;
+use stm32::diagnostics::BoardSelfTest;
+use stm32::lsi::LsiMeter;
 use stm32::pins::{self, Board};
 use stm32::relay::Relay;
 use stm32::system::{Dwt, Iwdg, Led};
@@ -63,7 +64,7 @@ firmware::app_tasks! {
     cycle_counter: Dwt,
     watchdog: Iwdg,
     led: Led,
-    self_test: ImageCheck,
+    self_test: BoardSelfTest,
     can_tx: Transmitter,
     can_rx: Receiver,
 }
@@ -116,6 +117,7 @@ fn start(spawner: Spawner) {
         can_tx,
         iwdg,
         rng,
+        lsi_timer,
     } = pins::split(p);
     // First of all: the relay output, de-energised.
     let relay: &'static Relay = RELAY.init(Relay::new(relay, relay_readback));
@@ -149,8 +151,10 @@ fn start(spawner: Spawner) {
     };
     let core = unwrap!(cortex_m::Peripherals::take());
     let cycles = Dwt::new(core.DCB, core.DWT);
-    let source = AdcSampler::new(adc, adc_dma, adc_trigger, inputs);
+    let (source, vrefint) = AdcSampler::new(adc, adc_dma, adc_trigger, inputs);
     let watchdog = Iwdg::start(iwdg);
+    let lsi = LsiMeter::new(lsi_timer, source.sample_period_ticks());
+    let self_test = BoardSelfTest::new(image, vrefint, lsi);
     // After the watchdog: a RNG that never becomes ready resets the board
     // (relay off) instead of hanging it silently.
     let seed = stm32::system::challenge_seed(rng);
@@ -159,6 +163,11 @@ fn start(spawner: Spawner) {
     let high = EXECUTOR_HIGH.start(interrupt::UART4);
     high.spawn(unwrap!(estimator(source, relay, cycles, pipeline, boot)));
 
-    spawner.spawn(unwrap!(supervisor(watchdog, relay, Led::new(led), image)));
+    spawner.spawn(unwrap!(supervisor(
+        watchdog,
+        relay,
+        Led::new(led),
+        self_test
+    )));
     spawner.spawn(unwrap!(can_start(spawner, can, can_rx, can_tx, seed)));
 }

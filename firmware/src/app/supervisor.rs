@@ -1,8 +1,12 @@
 //! The supervisor task (low priority, every 10 ms): feeds the watchdog
 //! only while the estimator keeps its deadline (`monitor::device::supervisor`),
 //! de-energises the relay for good when the estimator stalls (the
-//! watchdog then resets the board), drives the status LED, and writes the
-//! log: the estimator's events as they come, a summary every second.
+//! watchdog then resets the board), runs the device diagnostics (the
+//! board's self-test step, relay read-back and program flow every check,
+//! a VREFINT conversion every 100 ms, an LSI measurement every second;
+//! a fault drops the relay until reset), drives the status LED, and
+//! writes the log: the estimator's events as they come, a summary every
+//! second.
 
 use core::sync::atomic::Ordering;
 
@@ -34,6 +38,17 @@ pub const CAN_TX: Checkpoint = Checkpoint {
     bit: 1,
     deadline_checks: 50,
 };
+
+/// Checks per VREFINT conversion (every 100 ms): the ADC reference check
+/// (`monitor::device::diagnostics::reference`) faults after 10 readings out
+/// of range in a row, about 1 s.
+pub const REFERENCE_EVERY: u32 = 10;
+
+/// Checks per LSI measurement (every 1 s, one window of sample time; the
+/// first after one window of running): the clock cross-check
+/// (`monitor::device::diagnostics::clock`) takes the first as its
+/// reference and faults after two windows out of tolerance.
+pub const CLOCK_EVERY: u32 = 100;
 
 /// Checks per summary log line.
 const SUMMARY_EVERY: u32 = 100;
@@ -67,25 +82,58 @@ fn log_event(e: LogEvent) {
     }
 }
 
-/// The device diagnostics of one check (the rule is
-/// `monitor::device::diagnostics::check`): read the inputs, latch what is
-/// found in `shared` (the estimator shows it from its next block) and drop
-/// the relay at once. Returns false when a checkpoint was missed.
+/// The device diagnostics of check number `check` (from 1; the rule is
+/// `monitor::device::diagnostics::check`): read the inputs (VREFINT and the
+/// LSI only when due), latch what is found in `shared` (the estimator
+/// shows it from its next block) and drop the relay at once. Returns false
+/// when a checkpoint was missed.
 fn diagnose<R: RelayOutput, S: SelfTest>(
-    checks: &mut SupervisorChecks<2>,
+    diagnostics: &mut SupervisorChecks<2>,
     self_test: &mut S,
     relay: &R,
     shared: &Shared,
     started: bool,
+    check: u32,
 ) -> bool {
-    let out = checks.check(&CheckInputs {
+    let lsi_cycles = if check.is_multiple_of(CLOCK_EVERY) {
+        let n = self_test.lsi_cycles_per_window();
+        if n.is_none() {
+            defmt::warn!("clock check: no valid LSI measurement in this window");
+        }
+        n
+    } else {
+        None
+    };
+    let inputs = CheckInputs {
         self_test: self_test.step(),
         relay_commanded: relay.commanded(),
         relay_read_back: relay.read_back(),
         checkpoints: shared.take_checkpoints(),
         started,
         stalled: shared.stalled.load(Ordering::Acquire),
-    });
+        vrefint: check
+            .is_multiple_of(REFERENCE_EVERY)
+            .then(|| self_test.vrefint_code()),
+        lsi_cycles,
+        clock_failed: self_test.clock_failed(),
+    };
+    // Bring-up aid, compiled in with DEFMT_LOG=debug: the raw readings
+    // once a second.
+    if let (Some(code), Some(n)) = (inputs.vrefint, inputs.lsi_cycles) {
+        defmt::debug!(
+            "diagnostics: VREFINT code {=u16}, LSI {=u32} cycles/s",
+            code,
+            n
+        );
+    }
+    let had_reference = diagnostics.clock_reference().is_some();
+    let out = diagnostics.check(&inputs);
+    if let (false, Some(r)) = (had_reference, diagnostics.clock_reference()) {
+        defmt::info!(
+            "clock check: LSI reference {=u32} cycles per second of samples",
+            r
+        );
+    }
     for f in DeviceFault::ALL {
         if out.found.contains(f) {
             relay.set_energised(false);
@@ -111,11 +159,19 @@ pub async fn run<W: Watchdog, R: RelayOutput, L: StatusLed, S: SelfTest>(
     let mut checks = 0u32;
     loop {
         ticker.next().await;
+        checks = checks.wrapping_add(1);
         let now_ms = Instant::now().as_millis();
         let processed = shared.processed.load(Ordering::Acquire);
         let missed = shared.missed.load(Ordering::Acquire);
         let started = processed != 0 || missed != 0;
-        let flow_kept = diagnose(&mut diagnostics, &mut self_test, relay, shared, started);
+        let flow_kept = diagnose(
+            &mut diagnostics,
+            &mut self_test,
+            relay,
+            shared,
+            started,
+            checks,
+        );
         match supervisor.check(processed, missed) {
             // A task that missed its checkpoint withholds the watchdog too.
             Supervision::Feed if flow_kept => watchdog.feed(),
@@ -145,7 +201,6 @@ pub async fn run<W: Watchdog, R: RelayOutput, L: StatusLed, S: SelfTest>(
         while let Some(e) = shared.next_log() {
             log_event(e);
         }
-        checks = checks.wrapping_add(1);
         if checks.is_multiple_of(SUMMARY_EVERY) {
             let load = shared.load();
             defmt::info!(

@@ -10,6 +10,9 @@
 //! which holds only six, and panics for a seventh channel (fixed upstream
 //! after 0.6.0, embassy commit 9900d9f0a). Clock, prescaler and power-up
 //! stay with the HAL (`Adc::new`), the DMA ring buffer is embassy's.
+//!
+//! The same ADC converts the internal reference VREFINT in its injected
+//! group, which leaves this scan and its DMA untouched (`vrefint.rs`).
 
 use embassy_stm32::adc::{Adc, AnyAdcChannel, Exten, RegularTrigger, RxDma};
 use embassy_stm32::dma::{self, ReadableRingBuffer, TransferOptions};
@@ -24,8 +27,9 @@ use monitor::signal::frontend::CHANNELS;
 use static_cell::StaticCell;
 
 use super::pins::ADC_SAMPLE_TIME;
-use boards::timer::timer_period;
-use firmware::board_map::{BLOCK_LEN, SCAN_RATE_HZ};
+use super::vrefint::Vrefint;
+use boards::timer::{period_ticks, timer_period};
+use firmware::board_map::{BLOCK_LEN, SCANS_PER_SAMPLE, SCAN_RATE_HZ};
 
 bind_interrupts!(struct Irqs {
     DMA2_STREAM0 => dma::InterruptHandler<peripherals::DMA2_CH0>;
@@ -38,6 +42,7 @@ pub struct AdcSampler {
     ring: ReadableRingBuffer<'static, u16>,
     _trigger: Timer<'static, TIM3>,
     block: [u16; BLOCK_LEN],
+    sample_period_ticks: u64,
 }
 
 /// Program ADC1's regular sequence: `channels` in order, scan mode,
@@ -81,18 +86,21 @@ fn configure_scan(channels: &[u8; CHANNELS]) {
 }
 
 impl AdcSampler {
-    /// Configure TIM3, ADC1 and the DMA, and start sampling.
+    /// Configure TIM3, ADC1 and the DMA, and start sampling; returns the
+    /// sampler and ADC1's injected group, set up to convert VREFINT.
     pub fn new(
         adc: Peri<'static, ADC1>,
         dma: Peri<'static, DMA2_CH0>,
         trigger: Peri<'static, TIM3>,
         inputs: [AnyAdcChannel<'static, ADC1>; CHANNELS],
-    ) -> Self {
+    ) -> (Self, Vrefint) {
         // Clock, prescaler (21 MHz) and ADON from the HAL. The driver is
         // never dropped: dropping it would power the ADC down.
         core::mem::forget(Adc::new(adc));
         let channels = inputs.map(|ch| ch.get_hw_channel());
         configure_scan(&channels);
+        // Before the first trigger: nothing is converting yet.
+        let vrefint = Vrefint::configure();
 
         let request = RxDma::<ADC1>::request(&*dma);
         let channel = dma::Channel::new(dma, Irqs);
@@ -124,11 +132,19 @@ impl AdcSampler {
         trigger.set_master_mode(MasterMode::UPDATE);
         trigger.generate_update_event();
         trigger.start();
-        Self {
+        let sampler = Self {
             ring,
             _trigger: trigger,
             block: [0; BLOCK_LEN],
-        }
+            sample_period_ticks: period_ticks(psc, arr) * SCANS_PER_SAMPLE as u64,
+        };
+        (sampler, vrefint)
+    }
+
+    /// The sample period in ticks of TIM3's clock: its true length on that
+    /// clock (84 000 at 84 MHz), for the LSI cross-check.
+    pub fn sample_period_ticks(&self) -> u64 {
+        self.sample_period_ticks
     }
 }
 

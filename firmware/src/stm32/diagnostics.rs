@@ -3,6 +3,8 @@
 //! host). Here: the RAM test before the statics are initialised, the
 //! program image's checksum against the seal written by
 //! `scripts/seal-image.py`, the background re-check of the image, and the
+//! board's [`SelfTest`] for the supervisor: that re-check, VREFINT
+//! (`vrefint.rs`), the LSI against the sample clock (`lsi.rs`) and the
 //! clock security system's verdict (`system::clock_failed`).
 //!
 //! The installation parameters are compiled into the image, so the image
@@ -11,6 +13,9 @@
 use core::ptr;
 
 use firmware::board::SelfTest;
+
+use super::lsi::LsiMeter;
+use super::vrefint::Vrefint;
 use monitor::device::diagnostics::flash::{FlashScan, ScanStep, FLASH_CRC};
 use monitor::device::diagnostics::ram::{march_c_minus, WordMemory};
 use monitor::device::diagnostics::{DeviceFault, DeviceFaults};
@@ -188,13 +193,9 @@ impl ImageCheck {
     }
 }
 
-impl SelfTest for ImageCheck {
-    /// A clock failure (reported by the clock security system), else one
-    /// background step of the image check.
+impl ImageCheck {
+    /// One background step: the next chunk of the image.
     fn step(&mut self) -> Option<DeviceFault> {
-        if super::system::clock_failed() {
-            return Some(DeviceFault::Clock);
-        }
         let (offset, n) = self.scan.next_chunk(Self::CHUNK);
         let mut buf = [0u8; Self::CHUNK];
         read_image(offset, &mut buf[..n]);
@@ -202,6 +203,43 @@ impl SelfTest for ImageCheck {
             ScanStep::Mismatch { .. } => Some(DeviceFault::FlashImage),
             ScanStep::InProgress | ScanStep::PassOk => None,
         }
+    }
+}
+
+/// The board's self-test and diagnostic readings, for the supervisor.
+pub struct BoardSelfTest {
+    image: ImageCheck,
+    vrefint: Vrefint,
+    lsi: LsiMeter,
+}
+
+impl BoardSelfTest {
+    /// The image's background check, ADC1's injected group (VREFINT) and
+    /// TIM5 (the LSI), all set up.
+    pub fn new(image: ImageCheck, vrefint: Vrefint, lsi: LsiMeter) -> Self {
+        Self {
+            image,
+            vrefint,
+            lsi,
+        }
+    }
+}
+
+impl SelfTest for BoardSelfTest {
+    fn step(&mut self) -> Option<DeviceFault> {
+        self.image.step()
+    }
+
+    fn vrefint_code(&mut self) -> u16 {
+        self.vrefint.convert()
+    }
+
+    fn lsi_cycles_per_window(&mut self) -> Option<u32> {
+        self.lsi.measure()
+    }
+
+    fn clock_failed(&self) -> bool {
+        super::system::clock_failed()
     }
 }
 

@@ -3,7 +3,7 @@
 
 use embassy_stm32::adc::{AdcChannel, AnyAdcChannel, SampleTime};
 use embassy_stm32::peripherals::{
-    ADC1, CAN1, DMA2_CH0, IWDG, PB12, PB13, PB8, PB9, PC12, RNG, TIM3,
+    ADC1, CAN1, DMA2_CH0, IWDG, PB12, PB13, PB8, PB9, PC12, RNG, TIM3, TIM5,
 };
 use embassy_stm32::{Peri, Peripherals};
 use monitor::signal::frontend::CHANNELS;
@@ -38,6 +38,9 @@ pub struct Board {
     pub iwdg: Peri<'static, IWDG>,
     /// True random number generator (seeds the acknowledge challenges).
     pub rng: Peri<'static, RNG>,
+    /// TIM5, capturing the LSI on channel 4 (internal, no pin) for the
+    /// clock cross-check.
+    pub lsi_timer: Peri<'static, TIM5>,
 }
 
 /// Assign the pins.
@@ -63,5 +66,6 @@ pub fn split(p: Peripherals) -> Board {
         can_tx: p.PB9,
         iwdg: p.IWDG,
         rng: p.RNG,
+        lsi_timer: p.TIM5,
     }
 }

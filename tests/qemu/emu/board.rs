@@ -87,11 +87,24 @@ impl SampleSource for ReplayAdc {
     }
 }
 
-/// The board's background self-test: finds nothing, or, when a test
-/// injects one, a device fault from a given time on.
+/// VREFINT's code on a healthy board: VDDA = 3.3 V and the typical
+/// VREFINT of 1.21 V, 12 bits (1.21 / 3.3 × 4095 = 1501.5).
+pub const VREFINT_NOMINAL: u16 = 1502;
+
+/// LSI cycles per second of sample time on a healthy board: the LSI's
+/// typical 32 kHz.
+pub const LSI_NOMINAL: u32 = 32_000;
+
+/// The board's background self-test and diagnostic readings: finds
+/// nothing and reads a healthy board's values, or, when a test injects
+/// one, a device fault or a VREFINT code from a given time on. Every
+/// reading the supervisor takes is recorded (`record::Log::vrefint`,
+/// `record::Log::lsi`).
 pub struct ScriptedSelfTest {
     /// The fault and when it appears.
     pub fault: Option<(Instant, DeviceFault)>,
+    /// The VREFINT code and when it replaces [`VREFINT_NOMINAL`].
+    pub vrefint: Option<(Instant, u16)>,
 }
 
 impl SelfTest for ScriptedSelfTest {
@@ -99,6 +112,24 @@ impl SelfTest for ScriptedSelfTest {
         self.fault
             .filter(|(at, _)| Instant::now() >= *at)
             .map(|(_, f)| f)
+    }
+
+    fn vrefint_code(&mut self) -> u16 {
+        let now = Instant::now();
+        record::with(|l| l.vrefint.take(now));
+        self.vrefint
+            .filter(|(at, _)| now >= *at)
+            .map_or(VREFINT_NOMINAL, |(_, code)| code)
+    }
+
+    fn lsi_cycles_per_window(&mut self) -> Option<u32> {
+        let now = Instant::now();
+        record::with(|l| l.lsi.take(now));
+        Some(LSI_NOMINAL)
+    }
+
+    fn clock_failed(&self) -> bool {
+        false
     }
 }
 

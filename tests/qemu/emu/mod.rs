@@ -29,6 +29,7 @@ use embassy_executor::InterruptExecutor;
 use embassy_time::{Duration, Instant, Timer};
 use firmware::app;
 use firmware::app::shared::Shared;
+use firmware::app::supervisor::{CHECK_PERIOD, REFERENCE_EVERY};
 use firmware::board::BootInfo;
 use firmware::board_map::{FRONTEND, SCANS_PER_SAMPLE};
 use golden::params::golden_params;
@@ -45,6 +46,7 @@ use board::{
 };
 use case::EmuCase;
 use check::Expect;
+use monitor::device::diagnostics::reference::ReferenceConfig;
 use monitor::device::diagnostics::DeviceFault;
 
 static SHARED: Shared = Shared::new();
@@ -112,17 +114,58 @@ firmware::app_tasks! {
     can_rx: ScriptedCanRx,
 }
 
+/// What a test injects into the emulated board.
+#[derive(Clone, Copy, Debug)]
+pub enum Injection {
+    /// The board's self-test finds this device fault.
+    SelfTest(DeviceFault),
+    /// VREFINT converts to this code (the supervisor's reference check
+    /// must find the ADC reference out of range).
+    Vrefint(u16),
+}
+
+impl Injection {
+    /// The device fault the firmware must report.
+    fn fault(self) -> DeviceFault {
+        match self {
+            Self::SelfTest(f) => f,
+            Self::Vrefint(_) => DeviceFault::AdcReference,
+        }
+    }
+
+    /// Earliest and latest accepted time from the injection to the relay
+    /// off and the alarm frame. A self-test fault: at the next supervisor
+    /// check (three checks plus a block at most). A bad VREFINT: after the
+    /// reference check's debounce of 10 readings, one every
+    /// `REFERENCE_EVERY` checks (the first at most one reading period
+    /// after the injection): at least 9 and at most 10 reading periods,
+    /// plus the same margin.
+    fn reaction(self) -> (Duration, Duration) {
+        const MARGIN: Duration = Duration::from_millis(35);
+        match self {
+            Self::SelfTest(_) => (Duration::from_ticks(0), MARGIN),
+            Self::Vrefint(_) => {
+                let readings = u32::from(ReferenceConfig::DEFAULT.debounce);
+                let every = CHECK_PERIOD * REFERENCE_EVERY;
+                (every * (readings - 1), every * readings + MARGIN)
+            }
+        }
+    }
+}
+
 /// Wait for the end of the replay, check the run with an injected device
 /// fault, and end it.
 #[embassy_executor::task]
-async fn fault_checker(case: &'static EmuCase, t0: Instant, fault: DeviceFault, at: Instant) {
+async fn fault_checker(case: &'static EmuCase, t0: Instant, injection: Injection, at: Instant) {
     let period = Duration::from_micros(u64::from(case.sample_period_us));
     Timer::at(t0 + period * (case.samples - 1) + SETTLE).await;
-    let passed = record::with(|log| check::device_fault::run(log, fault, at));
+    let fault = injection.fault();
+    let passed = record::with(|log| check::device_fault::run(log, fault, at, injection.reaction()));
     if passed {
         println!(
-            "firmware on the emulated board, case {} with device fault {}: all checks passed",
+            "firmware on the emulated board, case {} with {:?}, device fault {}: all checks passed",
             case.name,
+            injection,
             fault.name()
         );
     }
@@ -216,10 +259,17 @@ pub fn run(case: &'static EmuCase) -> ! {
 /// the relay was first energised, and check the firmware's reaction.
 #[allow(dead_code)]
 pub fn run_with_fault(case: &'static EmuCase, fault: DeviceFault) -> ! {
-    run_with(case, Some(fault))
+    run_with(case, Some(Injection::SelfTest(fault)))
 }
 
-fn run_with(case: &'static EmuCase, fault: Option<DeviceFault>) -> ! {
+/// Replay `case` with VREFINT converting to `code` from 100 ms after the
+/// relay was first energised, and check the firmware's reaction.
+#[allow(dead_code)]
+pub fn run_with_vrefint(case: &'static EmuCase, code: u16) -> ! {
+    run_with(case, Some(Injection::Vrefint(code)))
+}
+
+fn run_with(case: &'static EmuCase, injection: Option<Injection>) -> ! {
     assert!(
         case.sample_period_us == app::SAMPLE_PERIOD_US && case.scans as usize == SCANS_PER_SAMPLE,
         "{}: codes generated for another sample period or scan count",
@@ -261,22 +311,32 @@ fn run_with(case: &'static EmuCase, fault: Option<DeviceFault>) -> ! {
         estimator(source, &RELAY, InstructionCounter, pipeline, boot).expect("estimator task"),
     );
     let low = EXECUTOR_LOW.start(Irq::Tasks);
-    // The injected fault: 100 ms after the host's reference first
-    // energises the relay (the golden's healthy claim).
-    let inject = fault.map(|f| {
+    // The injection: 100 ms after the host's reference first energises
+    // the relay (the golden's healthy claim).
+    let inject = injection.map(|i| {
         let energised = case
             .alarm_changes()
             .find(|(_, a)| a.relay_energised)
             .map(|(k, _)| k)
             .expect("the case energises the relay");
+        let (_, latest) = i.reaction();
         assert!(
-            energised + 150 < case.samples,
+            u64::from(energised + 150) + latest.as_millis() < u64::from(case.samples),
             "too late in the case to inject"
         );
         let period = Duration::from_micros(u64::from(case.sample_period_us));
-        (t0 + period * (energised + 100), f)
+        (t0 + period * (energised + 100), i)
     });
-    let self_test = ScriptedSelfTest { fault: inject };
+    let self_test = ScriptedSelfTest {
+        fault: inject.and_then(|(at, i)| match i {
+            Injection::SelfTest(f) => Some((at, f)),
+            Injection::Vrefint(_) => None,
+        }),
+        vrefint: inject.and_then(|(at, i)| match i {
+            Injection::Vrefint(code) => Some((at, code)),
+            Injection::SelfTest(_) => None,
+        }),
+    };
     let supervisor = supervisor(RecordingWatchdog, &RELAY, RecordingLed::new(), self_test);
     low.spawn(supervisor.expect("supervisor task"));
     low.spawn(can_tx(RecordingCanTx, Node::DEFAULT).expect("CAN transmit task"));
@@ -288,7 +348,7 @@ fn run_with(case: &'static EmuCase, fault: Option<DeviceFault>) -> ! {
     low.spawn(can_rx.expect("CAN receive task"));
     match inject {
         None => low.spawn(checker(case, t0, expect).expect("checker task")),
-        Some((at, f)) => low.spawn(fault_checker(case, t0, f, at).expect("checker task")),
+        Some((at, i)) => low.spawn(fault_checker(case, t0, i, at).expect("checker task")),
     }
     loop {
         cortex_m::asm::wfi();

@@ -33,6 +33,44 @@ pub struct RelayChange {
     pub energised: bool,
 }
 
+/// When the supervisor took one kind of diagnostic reading.
+#[derive(Clone, Copy, Debug)]
+pub struct Readings {
+    /// Readings taken.
+    pub count: u32,
+    /// The first and the last.
+    pub span: Option<(Instant, Instant)>,
+    /// Shortest and longest time between two readings.
+    pub gaps: Option<(Duration, Duration)>,
+}
+
+impl Readings {
+    const fn new() -> Self {
+        Self {
+            count: 0,
+            span: None,
+            gaps: None,
+        }
+    }
+
+    /// A reading taken at `now`.
+    pub fn take(&mut self, now: Instant) {
+        self.count += 1;
+        let first = match self.span {
+            Some((first, last)) => {
+                let gap = now - last;
+                self.gaps = Some(match self.gaps {
+                    Some((lo, hi)) => (lo.min(gap), hi.max(gap)),
+                    None => (gap, gap),
+                });
+                first
+            }
+            None => now,
+        };
+        self.span = Some((first, now));
+    }
+}
+
 /// Everything recorded.
 #[derive(Debug)]
 pub struct Log {
@@ -58,6 +96,10 @@ pub struct Log {
     pub max_feed_gap: Duration,
     /// Status LED changes.
     pub led_changes: u32,
+    /// VREFINT conversions the supervisor asked for.
+    pub vrefint: Readings,
+    /// LSI measurements the supervisor asked for.
+    pub lsi: Readings,
 }
 
 impl Log {
@@ -74,6 +116,8 @@ impl Log {
             feed_span: None,
             max_feed_gap: Duration::from_ticks(0),
             led_changes: 0,
+            vrefint: Readings::new(),
+            lsi: Readings::new(),
         }
     }
 

@@ -1,9 +1,12 @@
 //! The supervisor's diagnostics of one check period, as one rule: the
-//! board's self-test result, the relay read-back and the program-flow
-//! checkpoints in, the device faults found and whether the watchdog may be
-//! fed out. The firmware only reads the inputs and acts on the result.
+//! board's self-test result, the relay read-back, the program-flow
+//! checkpoints, the readings of the ADC reference and of the clocks in, the
+//! device faults found and whether the watchdog may be fed out. The
+//! firmware only reads the inputs and acts on the result.
 
+use super::clock::{ClockCheck, ClockConfig};
 use super::flow::{Checkpoint, Flow, FlowMonitor};
+use super::reference::{ReferenceCheck, ReferenceConfig};
 use super::relay::{ReadbackConfig, RelayReadback};
 use super::{DeviceFault, DeviceFaults};
 
@@ -24,6 +27,16 @@ pub struct CheckInputs {
     /// The estimator was declared stalled: the stall is the reaction, its
     /// checkpoint stays unmet.
     pub stalled: bool,
+    /// A VREFINT conversion taken in this period (12-bit code; 0 when the
+    /// conversion did not complete), if one was due: the ADC reference
+    /// check's reading.
+    pub vrefint: Option<u16>,
+    /// LSI cycles per window of sample time measured in this period, if a
+    /// measurement was due and could be taken: the clock cross-check's
+    /// reading (the first one is its reference).
+    pub lsi_cycles: Option<u32>,
+    /// The clock security system has tripped (read every period).
+    pub clock_failed: bool,
 }
 
 /// The outcome of one check.
@@ -40,6 +53,8 @@ pub struct CheckOutcome {
 pub struct SupervisorChecks<const N: usize> {
     readback: RelayReadback,
     flow: FlowMonitor<N>,
+    reference: ReferenceCheck,
+    clock: ClockCheck,
 }
 
 impl<const N: usize> SupervisorChecks<N> {
@@ -48,7 +63,15 @@ impl<const N: usize> SupervisorChecks<N> {
         Self {
             readback: RelayReadback::new(ReadbackConfig::DEFAULT),
             flow: FlowMonitor::new(checkpoints),
+            reference: ReferenceCheck::new(ReferenceConfig::DEFAULT),
+            clock: ClockCheck::new(ClockConfig::DEFAULT),
         }
+    }
+
+    /// The clock cross-check's reference (LSI cycles per window, the first
+    /// measurement), once taken.
+    pub const fn clock_reference(&self) -> Option<u32> {
+        self.clock.reference()
     }
 
     /// One check period.
@@ -59,6 +82,18 @@ impl<const N: usize> SupervisorChecks<N> {
         }
         if self.readback.check(i.relay_commanded, i.relay_read_back) {
             found.raise(DeviceFault::RelayReadback);
+        }
+        // Fed only when a reading was taken: the periods between readings
+        // (and the start-up before the first) neither pass nor fail.
+        if i.vrefint.is_some_and(|code| self.reference.check(code)) {
+            found.raise(DeviceFault::AdcReference);
+        }
+        let clock_fault = match i.lsi_cycles {
+            Some(n) => self.clock.check(n, i.clock_failed),
+            None => i.clock_failed,
+        };
+        if clock_fault {
+            found.raise(DeviceFault::Clock);
         }
         let flow_kept = if !i.started || i.stalled {
             true
@@ -109,6 +144,93 @@ mod tests {
             ..running(0)
         };
         assert_eq!(c.check(&stalled).found, DeviceFaults::NONE);
+    }
+
+    /// A VREFINT code for this VDDA (typical VREFINT, 12 bits).
+    fn vrefint_at(vdda: f32) -> u16 {
+        (super::super::reference::VREFINT_TYPICAL_V / vdda * 4095.0).round() as u16
+    }
+
+    #[test]
+    fn vrefint_readings_out_of_range_are_an_adc_reference_fault_after_debounce() {
+        let mut c = SupervisorChecks::new([EST]);
+        let reading = |code| CheckInputs {
+            vrefint: Some(code),
+            ..running(1)
+        };
+        for _ in 0..50 {
+            assert_eq!(c.check(&reading(vrefint_at(3.3))).found, DeviceFaults::NONE);
+        }
+        // VDDA sagged to 2.9 V: ten readings, with periods without a
+        // reading in between (they neither count nor reset the count).
+        for k in 1..=10 {
+            let out = c.check(&reading(vrefint_at(2.9)));
+            assert_eq!(
+                out.found.contains(DeviceFault::AdcReference),
+                k == 10,
+                "{k}"
+            );
+            for _ in 0..9 {
+                assert_eq!(c.check(&running(1)).found, DeviceFaults::NONE);
+            }
+        }
+        let mut c = SupervisorChecks::new([EST]);
+        for _ in 0..9 {
+            c.check(&reading(0));
+        }
+        assert!(
+            c.check(&reading(0))
+                .found
+                .contains(DeviceFault::AdcReference),
+            "a conversion that never completes (code 0) is a fault too"
+        );
+    }
+
+    #[test]
+    fn no_reading_during_start_up_is_no_fault() {
+        let mut c = SupervisorChecks::new([EST]);
+        for _ in 0..1000 {
+            let idle = CheckInputs::default();
+            assert_eq!(c.check(&idle).found, DeviceFaults::NONE);
+        }
+        assert_eq!(c.clock_reference(), None, "no LSI reading, no reference");
+    }
+
+    #[test]
+    fn a_clock_ratio_off_its_reference_or_a_css_trip_is_a_clock_fault() {
+        let mut c = SupervisorChecks::new([EST]);
+        let window = |n| CheckInputs {
+            lsi_cycles: Some(n),
+            ..running(1)
+        };
+        assert_eq!(c.check(&window(31_500)).found, DeviceFaults::NONE);
+        assert_eq!(c.clock_reference(), Some(31_500));
+        for _ in 0..10 {
+            assert_eq!(c.check(&window(32_000)).found, DeviceFaults::NONE);
+            for _ in 0..99 {
+                assert_eq!(c.check(&running(1)).found, DeviceFaults::NONE);
+            }
+        }
+        // The sample clock 10.5 times slow (PLL on the HSI): two windows.
+        assert_eq!(c.check(&window(330_750)).found, DeviceFaults::NONE);
+        assert!(c.check(&window(330_750)).found.contains(DeviceFault::Clock));
+
+        // A trip of the clock security system: at once, with or without
+        // an LSI reading in that period.
+        let mut c = SupervisorChecks::new([EST]);
+        let tripped = CheckInputs {
+            clock_failed: true,
+            ..running(1)
+        };
+        assert!(c.check(&tripped).found.contains(DeviceFault::Clock));
+        let tripped = CheckInputs {
+            lsi_cycles: Some(32_000),
+            ..tripped
+        };
+        assert!(c.check(&tripped).found.contains(DeviceFault::Clock));
+        // No LSI edge at all (count 0) as the first reading: no reference.
+        let mut c = SupervisorChecks::new([EST]);
+        assert!(c.check(&window(0)).found.contains(DeviceFault::Clock));
     }
 
     #[test]

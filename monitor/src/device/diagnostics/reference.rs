@@ -1,9 +1,10 @@
 //! The ADC reference check: the front end converts codes to volts assuming
 //! VDDA = 3.3 V. The STM32's internal reference VREFINT (1.21 V typical,
-//! 1.18–1.24 V over temperature, datasheet DS8626) is read on every block;
-//! the VDDA it implies must stay within the analogue supply's tolerance,
-//! or every analogue reading is scaled wrongly — a device fault, never a
-//! leak.
+//! 1.18–1.24 V over temperature, datasheet DS8626) is converted
+//! periodically (by the supervisor, every 100 ms, between the scans of the
+//! inputs); the VDDA it implies must stay within the analogue supply's
+//! tolerance, or every analogue reading is scaled wrongly — a device
+//! fault, never a leak.
 
 /// VREFINT, typical, V.
 pub const VREFINT_TYPICAL_V: f32 = 1.21;
@@ -25,7 +26,7 @@ pub struct ReferenceConfig {
 }
 
 impl ReferenceConfig {
-    /// 3.3 V ± 5 %, 12-bit ADC, 10 readings (10 ms at one per block).
+    /// 3.3 V ± 5 %, 12-bit ADC, 10 readings (1 s at one per 100 ms).
     pub const DEFAULT: Self = Self {
         vdda_nominal_v: 3.3,
         tolerance: 0.05,
@@ -34,7 +35,7 @@ impl ReferenceConfig {
     };
 }
 
-/// The reference check, fed one VREFINT code per block.
+/// The reference check, fed one VREFINT code per reading.
 #[derive(Clone, Debug)]
 pub struct ReferenceCheck {
     cfg: ReferenceConfig,

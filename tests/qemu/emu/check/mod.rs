@@ -43,6 +43,8 @@ pub enum Check {
     Commands,
     /// Watchdog feeding.
     Watchdog,
+    /// The diagnostic readings the supervisor takes (VREFINT, LSI).
+    Diagnostics,
     /// The firmware's own counters (samples, CAN, outbox, log).
     Counters,
 }
@@ -61,6 +63,7 @@ const ALL: [Check; CHECKS] = [
     Check::Stall,
     Check::Commands,
     Check::Watchdog,
+    Check::Diagnostics,
     Check::Counters,
 ];
 
@@ -143,6 +146,7 @@ pub fn run(case: &EmuCase, log: &Log, shared: &Shared, expect: &Expect, quiet: b
     outputs::verdict(case, &frames, &mut f);
     outputs::commands(case, &frames, shared, expect, &mut f);
     outputs::watchdog(case, log, &frames, &mut f);
+    outputs::diagnostics(case, log, &mut f);
     outputs::counters(case, log, shared, &mut f);
     f.summary();
     f

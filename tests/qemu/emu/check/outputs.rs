@@ -5,7 +5,7 @@
 
 use embassy_time::{Duration, Instant};
 use firmware::app::shared::Shared;
-use firmware::app::supervisor::CHECK_PERIOD;
+use firmware::app::supervisor::{CHECK_PERIOD, CLOCK_EVERY, REFERENCE_EVERY};
 use heapless::Vec;
 use monitor::Event;
 use monitor::LeakSet;
@@ -13,7 +13,7 @@ use monitor::LeakSet;
 use super::frames::Frames;
 use super::{Check, Expect, Findings};
 use crate::emu::case::EmuCase;
-use crate::emu::record::{Log, RelayChange, MAX_RELAY};
+use crate::emu::record::{Log, Readings, RelayChange, MAX_RELAY};
 
 /// How far (samples = ms) an alarm may be raised from the golden's time
 /// for the same recording before ADC quantisation (a 12-bit code is
@@ -338,6 +338,54 @@ pub fn watchdog(case: &EmuCase, log: &Log, frames: &Frames, f: &mut Findings) {
             ),
         );
     }
+}
+
+/// The supervisor takes its diagnostic readings at their pace for the
+/// whole run: VREFINT every `REFERENCE_EVERY` checks (100 ms), the LSI
+/// every `CLOCK_EVERY` checks (1 s), the first one period after it
+/// started (`record::Log::feed_span` dates its first check, within a
+/// check period of the first sample), the last within a period of the
+/// end of the run (the checker runs 50 ms after the last sample).
+/// Healthy readings must raise no device fault: the frames' contents
+/// (against the host's, which has none) check that.
+pub fn diagnostics(case: &EmuCase, log: &Log, f: &mut Findings) {
+    let (Some(t_end), Some((first_feed, _))) = (last_block(case, log), log.feed_span) else {
+        return;
+    };
+    let slack = Duration::from_millis(1);
+    let mut cadence = |name: &str, r: &Readings, every: u32| {
+        let period = CHECK_PERIOD * every;
+        let ok = match (r.span, r.gaps) {
+            (Some((first, last)), Some((lo, hi))) => {
+                lo + slack >= period
+                    && hi <= period + slack
+                    && first <= first_feed + period
+                    && last + period + slack >= t_end
+            }
+            _ => false,
+        };
+        if ok {
+            f.note(format_args!(
+                "diagnostics: {} {name} readings, every {} ms",
+                r.count,
+                period.as_millis()
+            ));
+        } else {
+            f.fail(
+                Check::Diagnostics,
+                format_args!(
+                    "{name} readings: {} taken, span {:?}, gaps {:?}, want every {} ms to {} ms",
+                    r.count,
+                    r.span,
+                    r.gaps,
+                    period.as_millis(),
+                    t_end.as_millis()
+                ),
+            );
+        }
+    };
+    cadence("VREFINT", &log.vrefint, REFERENCE_EVERY);
+    cadence("LSI", &log.lsi, CLOCK_EVERY);
 }
 
 /// The firmware's counters: every sample processed in time, every frame

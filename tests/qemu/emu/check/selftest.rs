@@ -71,10 +71,10 @@ fn expect_flagged(
     damage: impl FnOnce(&mut Log),
     want: &[Check],
 ) -> bool {
-    let saved = log.frames.clone();
+    let saved = (log.frames.clone(), log.vrefint, log.lsi);
     damage(log);
     let f = super::run(case, log, shared, expect, true);
-    log.frames = saved;
+    (log.frames, log.vrefint, log.lsi) = saved;
     let ok = !f.passed() && want.iter().all(|&c| f.flagged(c));
     println!(
         "self-test: {name}: {} (flagged {:?}, want {:?})",
@@ -136,6 +136,20 @@ pub fn run(case: &EmuCase, log: &mut Log, shared: &Shared, expect: &Expect) -> b
         expect,
         |log| wrong_verdict(log, case),
         &[Check::Content, Check::Verdict],
+    );
+    ok &= expect_flagged(
+        "one LSI measurement skipped (2 s between two)",
+        case,
+        log,
+        shared,
+        expect,
+        |log| {
+            if let Some((lo, hi)) = log.lsi.gaps {
+                log.lsi.gaps = Some((lo, hi * 2));
+            }
+            log.lsi.count -= 1;
+        },
+        &[Check::Diagnostics],
     );
     ok
 }
