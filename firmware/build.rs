@@ -25,12 +25,16 @@ fn main() {
     println!("cargo:rustc-link-arg-bins=-Tdefmt.x");
 
     println!("cargo:rerun-if-env-changed=LEAK_MONITOR_PARAMS");
-    let code = match std::env::var_os("LEAK_MONITOR_PARAMS").filter(|v| !v.is_empty()) {
-        None => "/// The reference rig's parameters (no `LEAK_MONITOR_PARAMS` given).\n\
-                 pub const INSTALLATION: Params = Params::NOMINAL;\n\
-                 /// Where the parameters came from.\n\
-                 pub const INSTALLATION_SOURCE: &str = \"nominal\";\n"
-            .to_string(),
+    let (params, mut code) = match std::env::var_os("LEAK_MONITOR_PARAMS").filter(|v| !v.is_empty())
+    {
+        None => (
+            monitor::Params::nominal(),
+            "/// The reference rig's parameters (no `LEAK_MONITOR_PARAMS` given).\n\
+             pub const INSTALLATION: Params = Params::NOMINAL;\n\
+             /// Where the parameters came from.\n\
+             pub const INSTALLATION_SOURCE: &str = \"nominal\";\n"
+                .to_string(),
+        ),
         Some(path) => {
             let mut path = PathBuf::from(path);
             if path.is_relative() {
@@ -46,7 +50,7 @@ fn main() {
             }
             // `Debug` of the (all-finite, validated) parameter structs is a
             // Rust struct expression, and f64's Debug round-trips exactly.
-            format!(
+            let code = format!(
                 "/// Parameters compiled in from `{}`.\n\
                  pub const INSTALLATION: Params = {params:?};\n\
                  /// Where the parameters came from.\n\
@@ -55,9 +59,24 @@ fn main() {
                 path.file_name()
                     .map(|n| n.to_string_lossy().into_owned())
                     .unwrap_or_default()
-            )
+            );
+            (params, code)
         }
     };
+    // The identity the commissioning link reports for this set (version 0:
+    // compiled in), sent on CAN in `LM_Identity`.
+    let mut buf = [0u8; link::storage::PARAMS_MAX];
+    let encoded = link::storage::encode_params(&params, &mut buf)
+        .unwrap_or_else(|| fail("the parameter set does not fit the link's encoding buffer"));
+    let id = link::storage::params_id(encoded, 0);
+    code += &format!(
+        "/// CRC-32 of the compiled-in set's canonical encoding (its identity).\n\
+         pub const INSTALLATION_CRC: u32 = {:#010x};\n\
+         /// The commissioning link's protocol version.\n\
+         pub const LINK_PROTOCOL: u8 = {};\n",
+        id.crc,
+        link::message::PROTOCOL_VERSION
+    );
     std::fs::write(out.join("installation.rs"), code).unwrap();
 
     println!("cargo:rerun-if-env-changed=LEAK_MONITOR_ACK_KEY");

@@ -7,7 +7,7 @@
 //! are needed on the traits).
 #![allow(async_fn_in_trait)]
 
-use monitor::protocol::{CanFrame, ResetCause};
+use monitor::protocol::{CanFrame, IdentityFrame, ResetCause, VersionFrame};
 
 /// The ring buffer overran: at least one block of samples was lost.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, defmt::Format)]
@@ -128,4 +128,8 @@ pub trait StatusLed {
 pub struct BootInfo {
     /// Why the board last reset.
     pub reset_cause: ResetCause,
+    /// The node and the active parameter set (`LM_Identity`).
+    pub identity: IdentityFrame,
+    /// The firmware's version (`LM_Version`).
+    pub version: VersionFrame,
 }

@@ -24,6 +24,7 @@ use firmware::board_map::FRONTEND;
 use monitor::device::diagnostics::brownout;
 use monitor::device::diagnostics::{DeviceFault, DeviceFaults};
 use monitor::device::Estimator;
+use monitor::protocol::{IdentityFrame, VersionFrame};
 use static_cell::StaticCell;
 use stm32::adc::AdcSampler;
 use stm32::can::{Receiver, Transmitter};
@@ -102,6 +103,12 @@ fn main() -> ! {
 fn start(spawner: Spawner) {
     let boot = BootInfo {
         reset_cause: stm32::system::take_reset_cause(),
+        identity: IdentityFrame {
+            node: installation::INSTALLATION.node(),
+            params_crc: installation::INSTALLATION_CRC,
+            params_version: 0,
+        },
+        version: VersionFrame::new(env!("CARGO_PKG_VERSION"), installation::LINK_PROTOCOL),
     };
     let p = embassy_stm32::init(stm32::clocks::config());
     let Board {
@@ -141,8 +148,9 @@ fn start(spawner: Spawner) {
         }
     }
     defmt::info!(
-        "installation parameters: {}",
-        installation::INSTALLATION_SOURCE
+        "installation parameters: {} (identity {=u32:#010x}, version 0)",
+        installation::INSTALLATION_SOURCE,
+        installation::INSTALLATION_CRC
     );
     let pipeline = match app::estimator::pipeline::<Dwt>(&installation::INSTALLATION, FRONTEND) {
         Ok(e) => ESTIMATOR.init(e),

@@ -14,8 +14,8 @@ use monitor::protocol::auth::{
     acknowledge_frame, acknowledge_frame_for, AckKey, KeyKind, DEVELOPMENT_KEY,
 };
 use monitor::protocol::{
-    AlarmFrame, CanFrame, ChallengeFrame, Decoder, DetailFrame, Encoder, HeartbeatFrame, Message,
-    Node, ResetCause, StatusFrame,
+    AlarmFrame, CanFrame, ChallengeFrame, Decoder, DetailFrame, Encoder, HeartbeatFrame,
+    IdentityFrame, Message, Node, ResetCause, StatusFrame, VersionFrame,
 };
 use monitor::LeakSet;
 use monitor::{Hypothesis, Verdict};
@@ -99,6 +99,18 @@ fn messages() -> Vec<Message> {
                 .get(i as usize % (AckResult::ALL.len() + 1))
                 .copied(),
             ack_attempts: (i * 13) as u8,
+        }));
+    }
+    // Every node number, range ends of the identity.
+    for i in 0..16u32 {
+        v.push(Message::Identity(IdentityFrame {
+            node: Node::ALL[i as usize % Node::ALL.len()],
+            params_crc: [0, u32::MAX, i.wrapping_mul(0x9E37_79B9)][i as usize % 3],
+            params_version: [0, u16::MAX, i as u16 * 977][i as usize % 3],
+        }));
+        v.push(Message::Version(VersionFrame {
+            firmware: [i as u8, 255 - i as u8, (i * 17) as u8],
+            link_protocol: [0, 1, 255][i as usize % 3],
         }));
     }
     v

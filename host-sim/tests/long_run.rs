@@ -1,5 +1,7 @@
 //! One hour of a healthy rig at 1 kHz in f32: everything stays finite, the
-//! covariances PSD, and no alarm is raised. Takes a few minutes:
+//! covariances PSD, no leak and no sensor fault is ever claimed, and the
+//! monitor concludes `healthy` for nearly all of it (it may say
+//! `inconclusive` while warming up or short of evidence, never a leak). Takes a few minutes:
 //! `cargo test --release -p host-sim --test long_run -- --ignored`
 
 use host_sim::sim::{Profile, Rig, Scenario, Simulation};
@@ -19,9 +21,18 @@ fn one_hour_healthy_stays_finite_psd_and_silent() {
     let mut m: Monitor<f32> = Monitor::new(&Params::nominal()).unwrap();
     let mut worst = f64::MAX;
     let mut n = 0u64;
+    let mut healthy = 0u64;
+    let mut last = Verdict::Inconclusive;
     for row in Simulation::new(sc, Rig::reference()) {
         let s = m.step(&Sample::from(&row));
-        assert_eq!(s.verdict, Verdict::Healthy, "alarm at t = {}", s.t_s);
+        assert!(
+            matches!(s.verdict, Verdict::Healthy | Verdict::Inconclusive),
+            "{:?} at t = {}",
+            s.verdict,
+            s.t_s
+        );
+        healthy += u64::from(s.verdict == Verdict::Healthy);
+        last = s.verdict;
         assert!(
             s.events.is_empty(),
             "event at t = {}: {:?}",
@@ -40,5 +51,11 @@ fn one_hour_healthy_stays_finite_psd_and_silent() {
         }
     }
     assert_eq!(n, 3_600_000);
-    println!("1 h healthy: no alarm, smallest covariance eigenvalue {worst:.3e}");
+    let fraction = healthy as f64 / n as f64;
+    println!(
+        "1 h healthy: no alarm, healthy on {:.2} % of samples, smallest covariance eigenvalue {worst:.3e}",
+        100.0 * fraction
+    );
+    assert!(fraction > 0.95, "healthy on only {:.2} %", 100.0 * fraction);
+    assert_eq!(last, Verdict::Healthy);
 }

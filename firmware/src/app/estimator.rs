@@ -124,6 +124,12 @@ pub async fn run<S: SampleSource, R: RelayOutput, C: CycleCounter>(
             dropped_before = dropped;
             shared.set_load(report);
         }
+        if out.due.identity {
+            shared.post(Message::Identity(boot.identity));
+        }
+        if out.due.version {
+            shared.post(Message::Version(boot.version));
+        }
 
         estimator.processed(cycles.cycles().wrapping_sub(start));
         shared

@@ -14,6 +14,8 @@
 //! | 0x302 | [`DetailFrame`] | every 1 s |
 //! | 0x303 | [`HeartbeatFrame`] | every 1 s |
 //! | 0x304 | [`ChallengeFrame`] | at once when it changes, and every 1 s |
+//! | 0x305 | [`IdentityFrame`] | every 1 s: node, active parameter set |
+//! | 0x306 | [`VersionFrame`] | every 1 s: firmware version |
 //! | 0x310 | [`CommandFrame`] | received: acknowledge a latched alarm, authenticated over the current challenge ([`auth`]) |
 //!
 //! The identifiers are node 0's. On a bus shared by several monitors each
@@ -35,6 +37,7 @@ pub mod detail;
 pub mod e2e;
 pub mod gate;
 pub mod heartbeat;
+pub mod identity;
 pub mod outbox;
 pub mod p01_receiver;
 pub mod schedule;
@@ -47,6 +50,7 @@ pub use command::{Authentic, Command, CommandFrame, CommandReceiver, CommandReje
 pub use detail::DetailFrame;
 pub use e2e::{E2eError, Sequence};
 pub use heartbeat::{HeartbeatFrame, ResetCause};
+pub use identity::{IdentityFrame, VersionFrame};
 pub use signal::{Signal, SignalValue, Signals};
 pub use status::StatusFrame;
 
@@ -109,18 +113,24 @@ pub enum MessageKind {
     Heartbeat = 3,
     /// The acknowledge challenge, key kind, last acknowledge outcome.
     Challenge = 4,
+    /// Node number and the active parameter set's identity.
+    Identity = 5,
+    /// Firmware version.
+    Version = 6,
     /// Received command (acknowledge alarm).
-    Command = 5,
+    Command = 7,
 }
 
 impl MessageKind {
     /// Every kind, in identifier order.
-    pub const ALL: [MessageKind; 6] = [
+    pub const ALL: [MessageKind; 8] = [
         Self::Alarm,
         Self::Status,
         Self::Detail,
         Self::Heartbeat,
         Self::Challenge,
+        Self::Identity,
+        Self::Version,
         Self::Command,
     ];
 
@@ -135,6 +145,8 @@ impl MessageKind {
             Self::Detail => 0x302,
             Self::Heartbeat => 0x303,
             Self::Challenge => 0x304,
+            Self::Identity => 0x305,
+            Self::Version => 0x306,
             Self::Command => 0x310,
         }
     }
@@ -166,6 +178,8 @@ impl MessageKind {
             Self::Detail => "LM_Detail",
             Self::Heartbeat => "LM_Heartbeat",
             Self::Challenge => "LM_Challenge",
+            Self::Identity => "LM_Identity",
+            Self::Version => "LM_Version",
             Self::Command => "LM_Command",
         }
     }
@@ -258,6 +272,10 @@ pub enum Message {
     Heartbeat(HeartbeatFrame),
     /// Challenge.
     Challenge(ChallengeFrame),
+    /// Identity.
+    Identity(IdentityFrame),
+    /// Version.
+    Version(VersionFrame),
     /// Command.
     Command(CommandFrame),
 }
@@ -271,6 +289,8 @@ impl Message {
             Self::Detail(_) => MessageKind::Detail,
             Self::Heartbeat(_) => MessageKind::Heartbeat,
             Self::Challenge(_) => MessageKind::Challenge,
+            Self::Identity(_) => MessageKind::Identity,
+            Self::Version(_) => MessageKind::Version,
             Self::Command(_) => MessageKind::Command,
         }
     }
@@ -283,6 +303,8 @@ impl Message {
             Self::Detail(m) => m.signals(),
             Self::Heartbeat(m) => m.signals(),
             Self::Challenge(m) => m.signals(),
+            Self::Identity(m) => m.signals(),
+            Self::Version(m) => m.signals(),
             Self::Command(m) => m.signals(),
         }
     }
@@ -294,6 +316,8 @@ impl Message {
             Self::Detail(m) => m.write(d),
             Self::Heartbeat(m) => m.write(d),
             Self::Challenge(m) => m.write(d),
+            Self::Identity(m) => m.write(d),
+            Self::Version(m) => m.write(d),
             Self::Command(m) => m.write(d),
         }
     }
@@ -305,6 +329,8 @@ impl Message {
             MessageKind::Detail => Self::Detail(DetailFrame::read(d)?),
             MessageKind::Heartbeat => Self::Heartbeat(HeartbeatFrame::read(d)?),
             MessageKind::Challenge => Self::Challenge(ChallengeFrame::read(d)?),
+            MessageKind::Identity => Self::Identity(IdentityFrame::read(d)?),
+            MessageKind::Version => Self::Version(VersionFrame::read(d)?),
             MessageKind::Command => Self::Command(CommandFrame::read(d)?),
         })
     }

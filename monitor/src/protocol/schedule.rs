@@ -1,7 +1,8 @@
 //! When each frame is due, given the sample clock: status every 100 ms,
-//! detail and heartbeat every second (staggered so they do not share a
-//! millisecond with each other), the alarm frame at once on a change of
-//! the alarm output and every second as a refresh for late listeners.
+//! detail, heartbeat, identity and version every second (staggered so they
+//! do not share a millisecond with each other), the alarm frame at once on
+//! a change of the alarm output and every second as a refresh for late
+//! listeners.
 
 /// Status frame period, ms.
 pub const STATUS_PERIOD_MS: u64 = 100;
@@ -13,6 +14,10 @@ pub const HEARTBEAT_PHASE_MS: u64 = 250;
 pub const DETAIL_PHASE_MS: u64 = 550;
 /// Phase of the alarm refresh within the second, ms.
 pub const ALARM_REFRESH_PHASE_MS: u64 = 750;
+/// Phase of the identity frame within the second, ms.
+pub const IDENTITY_PHASE_MS: u64 = 850;
+/// Phase of the version frame within the second, ms.
+pub const VERSION_PHASE_MS: u64 = 950;
 
 /// Frames due at one sample.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -26,6 +31,10 @@ pub struct Due {
     pub detail: bool,
     /// Heartbeat frame.
     pub heartbeat: bool,
+    /// Identity frame.
+    pub identity: bool,
+    /// Version frame.
+    pub version: bool,
 }
 
 /// Frame scheduler.
@@ -59,12 +68,16 @@ impl FrameScheduler {
                 status: crossed(last, t_ms, STATUS_PERIOD_MS, 0),
                 detail: crossed(last, t_ms, SLOW_PERIOD_MS, DETAIL_PHASE_MS),
                 heartbeat: crossed(last, t_ms, SLOW_PERIOD_MS, HEARTBEAT_PHASE_MS),
+                identity: crossed(last, t_ms, SLOW_PERIOD_MS, IDENTITY_PHASE_MS),
+                version: crossed(last, t_ms, SLOW_PERIOD_MS, VERSION_PHASE_MS),
             },
             None => Due {
                 alarm: true,
                 status: true,
                 detail: true,
                 heartbeat: true,
+                identity: true,
+                version: true,
             },
         };
         if self.last_ms.is_none_or(|last| t_ms > last) {
@@ -78,14 +91,21 @@ impl FrameScheduler {
 mod tests {
     use super::*;
 
-    fn run(ms: u64, changes: &[u64]) -> [heapless::Vec<u64, 128>; 4] {
+    fn run(ms: u64, changes: &[u64]) -> [heapless::Vec<u64, 128>; 6] {
         let mut s = FrameScheduler::new();
-        let mut out: [heapless::Vec<u64, 128>; 4] = Default::default();
+        let mut out: [heapless::Vec<u64, 128>; 6] = Default::default();
         for t in 0..ms {
             let d = s.due(t, changes.contains(&t));
-            for (i, on) in [d.alarm, d.status, d.detail, d.heartbeat]
-                .into_iter()
-                .enumerate()
+            for (i, on) in [
+                d.alarm,
+                d.status,
+                d.detail,
+                d.heartbeat,
+                d.identity,
+                d.version,
+            ]
+            .into_iter()
+            .enumerate()
             {
                 if on {
                     out[i].push(t).unwrap();
@@ -97,10 +117,12 @@ mod tests {
 
     #[test]
     fn periods_and_phases() {
-        let [alarm, status, detail, heartbeat] = run(3000, &[]);
+        let [alarm, status, detail, heartbeat, identity, version] = run(3000, &[]);
         assert_eq!(status.len(), 30);
         assert!(status.iter().all(|t| t % 100 == 0));
         assert_eq!(heartbeat.as_slice(), &[0, 250, 1250, 2250]);
+        assert_eq!(identity.as_slice(), &[0, 850, 1850, 2850]);
+        assert_eq!(version.as_slice(), &[0, 950, 1950, 2950]);
         assert_eq!(detail.as_slice(), &[0, 550, 1550, 2550]);
         assert_eq!(alarm.as_slice(), &[0, 750, 1750, 2750]);
     }
@@ -118,7 +140,7 @@ mod tests {
         s.due(95, false);
         // 95 → 1305 crosses 100..1300 (status), 250 and 1250 (heartbeat once).
         let d = s.due(1305, false);
-        assert!(d.status && d.heartbeat && d.detail && d.alarm);
+        assert!(d.status && d.heartbeat && d.detail && d.alarm && d.identity && d.version);
         let d = s.due(1306, false);
         assert_eq!(d, Due::default());
         // Time that does not advance sends nothing periodic.

@@ -47,6 +47,12 @@ pub(crate) fn one_of_each() -> [Message; MessageKind::COUNT] {
             last_ack: Some(crate::decision::acknowledge::AckResult::Accepted),
             ack_attempts: 77,
         }),
+        Message::Identity(IdentityFrame {
+            node: Node::new(6).unwrap(),
+            params_crc: 0xFEDC_BA98,
+            params_version: 4321,
+        }),
+        Message::Version(VersionFrame::new("3.14.15", 2)),
         Message::Command(CommandFrame {
             command: Command::AcknowledgeAlarm,
             mac: [0xA0, 0xB1, 0xC2, 0xD3, 0xE4, 0xF5],
@@ -434,7 +440,7 @@ fn heartbeat_nibbles_saturate() {
 
 #[test]
 fn signals_name_every_field_with_its_physical_value() {
-    let [alarm, status, detail, heartbeat, challenge, command] = one_of_each();
+    let [alarm, status, detail, heartbeat, challenge, identity, version, command] = one_of_each();
     let names = |m: &Message| -> heapless::Vec<&'static str, 12> {
         m.signals().iter().map(|s| s.name).collect()
     };
@@ -479,6 +485,23 @@ fn signals_name_every_field_with_its_physical_value() {
         names(&challenge).as_slice(),
         ["AckKey", "Challenge", "AckResult", "AckAttempts"]
     );
+    assert_eq!(
+        names(&identity).as_slice(),
+        ["Node", "ParamsCrc", "ParamsVersion"]
+    );
+    assert_eq!(
+        names(&version).as_slice(),
+        [
+            "FirmwareMajor",
+            "FirmwareMinor",
+            "FirmwarePatch",
+            "LinkProtocol"
+        ]
+    );
+    assert_eq!(
+        identity.signals()[1].value.physical(),
+        Some(f64::from(0xFEDC_BA98_u32))
+    );
     assert_eq!(names(&command).as_slice(), ["Command", "Mac"]);
     assert_eq!(
         command.signals()[1].value.physical(),
@@ -521,7 +544,7 @@ fn a_node_number_moves_the_whole_block() {
         }
     }
     assert_eq!(MessageKind::Command.id_at(Node::new(7).unwrap()), 0x3F0);
-    for id in [0x000, 0x2FF, 0x305, 0x30F, 0x311, 0x31F, 0x400, 0x7FF] {
+    for id in [0x000, 0x2FF, 0x307, 0x30F, 0x311, 0x31F, 0x400, 0x7FF] {
         assert_eq!(MessageKind::locate(id), None, "{id:#x}");
     }
 }

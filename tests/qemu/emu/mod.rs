@@ -36,7 +36,7 @@ use golden::params::golden_params;
 use heapless::Vec;
 use monitor::device::Estimator;
 use monitor::protocol::auth::{acknowledge_frame, Challenger};
-use monitor::protocol::{CanFrame, Node, ResetCause};
+use monitor::protocol::{CanFrame, IdentityFrame, Node, ResetCause, VersionFrame};
 use qemu_tests::counter::{self, Counter};
 use qemu_tests::{exit, println};
 
@@ -283,10 +283,12 @@ fn run_with(case: &'static EmuCase, injection: Option<Injection>) -> ! {
         exit(false);
     }
 
+    let params = golden_params(case.sample_period_s, case.warm_up_s);
     let boot = BootInfo {
         reset_cause: RESET_CAUSE,
+        identity: identity(&params),
+        version: VersionFrame::new(env!("CARGO_PKG_VERSION"), link::message::PROTOCOL_VERSION),
     };
-    let params = golden_params(case.sample_period_s, case.warm_up_s);
     let pipeline = match app::estimator::pipeline::<InstructionCounter>(&params, FRONTEND) {
         Ok(e) => cortex_m::singleton!(: Estimator<f32> = e).expect("one estimator"),
         Err(e) => panic!("invalid golden parameters: {}", e.field),
@@ -299,6 +301,8 @@ fn run_with(case: &'static EmuCase, injection: Option<Injection>) -> ! {
     let expect = Expect {
         reset_cause: RESET_CAUSE,
         rejected_commands,
+        identity: boot.identity,
+        version: boot.version,
     };
 
     // SAFETY: set before the executors start, as they require.
@@ -352,5 +356,18 @@ fn run_with(case: &'static EmuCase, injection: Option<Injection>) -> ! {
     }
     loop {
         cortex_m::asm::wfi();
+    }
+}
+
+/// The identity of `params` as the commissioning link computes it
+/// (version 0: compiled in), as the firmware's build script does.
+fn identity(params: &monitor::Params) -> IdentityFrame {
+    let mut buf = [0u8; link::storage::PARAMS_MAX];
+    let encoded =
+        link::storage::encode_params(params, &mut buf).expect("the golden parameters encode");
+    IdentityFrame {
+        node: params.node(),
+        params_crc: link::storage::params_id(encoded, 0).crc,
+        params_version: 0,
     }
 }

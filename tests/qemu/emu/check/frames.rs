@@ -1,9 +1,10 @@
 //! The CAN frames: each decodes (CRC, fields) with consecutive counters
 //! per identifier; each kind is sent exactly at the samples its schedule
-//! says (`monitor::protocol::schedule`: status every 100 ms, detail and
-//! heartbeat every second, alarm every second and at once on a change);
-//! status, detail and alarm frames hold exactly what the host computed
-//! for that sample; heartbeats report no missed samples, overruns or
+//! says (`monitor::protocol::schedule`: status every 100 ms, detail,
+//! heartbeat, identity and version every second, alarm every second and at
+//! once on a change); status, detail and alarm frames hold exactly what the
+//! host computed for that sample, identity and version what the board
+//! booted with; heartbeats report no missed samples, overruns or
 //! dropped frames; after the last sample, exactly one frame: the alarm
 //! frame announcing the stalled estimator, 20–30 ms later (two
 //! supervisor checks without progress after the last one with).
@@ -13,7 +14,8 @@ use firmware::app::supervisor::CHECK_PERIOD;
 use heapless::Vec;
 use monitor::device::alarm::AlarmState;
 use monitor::protocol::schedule::{
-    ALARM_REFRESH_PHASE_MS, DETAIL_PHASE_MS, HEARTBEAT_PHASE_MS, SLOW_PERIOD_MS, STATUS_PERIOD_MS,
+    ALARM_REFRESH_PHASE_MS, DETAIL_PHASE_MS, HEARTBEAT_PHASE_MS, IDENTITY_PHASE_MS, SLOW_PERIOD_MS,
+    STATUS_PERIOD_MS, VERSION_PHASE_MS,
 };
 use monitor::protocol::{AlarmFrame, Decoder, HeartbeatFrame, Message, MessageKind, Sequence};
 
@@ -61,6 +63,8 @@ fn due(kind: MessageKind, t_ms: u64, changed: bool) -> bool {
         MessageKind::Status => t_ms.is_multiple_of(STATUS_PERIOD_MS),
         MessageKind::Detail => slow(DETAIL_PHASE_MS),
         MessageKind::Heartbeat => slow(HEARTBEAT_PHASE_MS),
+        MessageKind::Identity => slow(IDENTITY_PHASE_MS),
+        MessageKind::Version => slow(VERSION_PHASE_MS),
         // Sent by the CAN receiver task on its own clock.
         MessageKind::Challenge | MessageKind::Command => false,
     }
@@ -155,12 +159,16 @@ fn kind(case: &EmuCase, frames: &Frames, kind: MessageKind, expect: &Expect, f: 
                         heartbeat(&h, g.at, expect, f);
                         true
                     }
+                    Message::Identity(i) => i == expect.identity,
+                    Message::Version(v) => v == expect.version,
                     Message::Challenge(_) | Message::Command(_) => false,
                 };
                 if !same {
                     let host = match kind {
                         MessageKind::Status => Message::Status(r.status),
                         MessageKind::Detail => Message::Detail(r.detail),
+                        MessageKind::Identity => Message::Identity(expect.identity),
+                        MessageKind::Version => Message::Version(expect.version),
                         _ => Message::Alarm(r.alarm),
                     };
                     f.fail(
@@ -245,6 +253,8 @@ pub fn check(case: &EmuCase, log: &Log, expect: &Expect, f: &mut Findings) -> Fr
         MessageKind::Status,
         MessageKind::Detail,
         MessageKind::Heartbeat,
+        MessageKind::Identity,
+        MessageKind::Version,
     ] {
         kind(case, &frames, k, expect, f);
     }
@@ -280,12 +290,14 @@ pub fn print(frames: &Frames, f: &Findings) {
     }
     let count = |kind: MessageKind| frames.list.iter().filter(|d| d.msg.kind() == kind).count();
     f.note(format_args!(
-        "frames: {} decoded: alarm {}, status {}, detail {}, heartbeat {}",
+        "frames: {} decoded: alarm {}, status {}, detail {}, heartbeat {}, identity {}, version {}",
         frames.list.len(),
         count(MessageKind::Alarm),
         count(MessageKind::Status),
         count(MessageKind::Detail),
-        count(MessageKind::Heartbeat)
+        count(MessageKind::Heartbeat),
+        count(MessageKind::Identity),
+        count(MessageKind::Version)
     ));
     let mut last_status = None;
     for d in &frames.list {

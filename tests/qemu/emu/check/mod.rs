@@ -134,6 +134,10 @@ pub struct Expect {
     pub reset_cause: ResetCause,
     /// Command frames the firmware must reject (corrupted, replayed).
     pub rejected_commands: u32,
+    /// The identity frame the board booted with.
+    pub identity: monitor::protocol::IdentityFrame,
+    /// The version frame the board booted with.
+    pub version: monitor::protocol::VersionFrame,
 }
 
 /// Check the run; print the frame sequence and every failure unless
