@@ -33,6 +33,7 @@
 
 pub(crate) mod decision;
 pub mod device;
+mod elapsed;
 pub(crate) mod estimation;
 mod hypothesis;
 mod leak;

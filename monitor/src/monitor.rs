@@ -4,6 +4,7 @@
 
 use crate::decision::latch::AckOutcome;
 use crate::decision::Decision;
+use crate::elapsed::{elapsed, exceeds, Window};
 use crate::estimation::bank::{
     external_index, internal_index, Bank, BankOutput, HypothesisFilter, Measurement, ProcessNoise,
     StepContext, NB, NZ,
@@ -36,8 +37,9 @@ struct Config<T> {
     leak_prior_sd: T,
     substeps: u32,
     period_s: f64,
-    /// GAP_PERIODS · period_s: a longer step is a data gap.
-    gap_s: f64,
+    /// GAP_PERIODS · period_s, as its bits (`elapsed::exceeds`): a longer
+    /// step is a data gap.
+    gap_bits: u64,
     pressure_lag_s: T,
     warm_up_s: f64,
     /// Lowest leak coefficients (internal, external), l/min at 10 bar.
@@ -56,9 +58,9 @@ pub struct Monitor<T: Real = f32> {
     checker: SampleChecker,
     bank: Option<Bank<T>>,
     last_t: Option<f64>,
-    spool_dt_s: f64,
-    /// 1e-6 · spool_dt_s: a step that differs more needs new spool maps.
-    spool_dt_tol_s: f64,
+    /// The steps the spool maps are for: within ±1e-6 of the step they
+    /// were computed for; a step outside needs new spool maps.
+    spool_dt_window: Window,
     spool_sub: SpoolStep<T>,
     spool_dt: SpoolStep<T>,
     /// Time since the filters (re)started, s, counted only until the
@@ -119,7 +121,7 @@ impl<T: Real> Monitor<T> {
             leak_prior_sd: T::c(f.leak_prior_lpm),
             substeps: f.substeps,
             period_s: f.sample_period_s,
-            gap_s: GAP_PERIODS * f.sample_period_s,
+            gap_bits: (GAP_PERIODS * f.sample_period_s).to_bits(),
             pressure_lag_s: T::c(params.sensors.pressure_lag_s),
             warm_up_s: f.warm_up_s,
             // l/min per bar → l/min at 10 bar.
@@ -134,8 +136,7 @@ impl<T: Real> Monitor<T> {
         Ok(Self {
             spool_sub: plant.spool_step(period / f.substeps as f64),
             spool_dt: plant.spool_step(period),
-            spool_dt_s: period,
-            spool_dt_tol_s: SPOOL_DT_TOLERANCE * period,
+            spool_dt_window: Window::around(period, SPOOL_DT_TOLERANCE * period),
             plant,
             cfg,
             checker: SampleChecker::new(params),
@@ -187,8 +188,7 @@ impl<T: Real> Monitor<T> {
         let mut flags = 0u16;
         // Time step: a non-increasing time is ignored, a gap restarts.
         let dt = match self.last_t {
-            Some(t0) if !(sample.t_s > t0) => None,
-            Some(t0) => Some(sample.t_s - t0),
+            Some(t0) => elapsed(t0, sample.t_s),
             None => Some(self.cfg.period_s),
         };
         // The time the readings were seen to hold, for the frozen-reading
@@ -207,7 +207,7 @@ impl<T: Real> Monitor<T> {
             return self.status(sample.t_s, checked.faulted, flags, events);
         };
         self.last_t = Some(sample.t_s);
-        if dt > self.cfg.gap_s && self.bank.is_some() {
+        if exceeds(dt, self.cfg.gap_bits) && self.bank.is_some() {
             self.bank = None;
             self.held = None;
             self.checker.break_pressure_sequence();
@@ -258,9 +258,9 @@ impl<T: Real> Monitor<T> {
             );
         };
 
-        if (dt - self.spool_dt_s).abs() > self.spool_dt_tol_s {
-            self.spool_dt_s = dt;
-            self.spool_dt_tol_s = SPOOL_DT_TOLERANCE * dt;
+        // dt > 0 here (`elapsed`, or the nominal period).
+        if !self.spool_dt_window.contains(dt) {
+            self.spool_dt_window = Window::around(dt, SPOOL_DT_TOLERANCE * dt);
             self.spool_dt = self.plant.spool_step(dt);
             self.spool_sub = self.plant.spool_step(dt / self.cfg.substeps as f64);
         }
