@@ -36,7 +36,11 @@ pub(crate) fn elapsed(t0: f64, t: f64) -> Option<f64> {
             }
         }
     }
-    (t > t0).then(|| t - t0)
+    if t > t0 {
+        Some(t - t0)
+    } else {
+        None
+    }
 }
 
 /// A closed interval of non-negative times, tested by bit pattern: IEEE 754
