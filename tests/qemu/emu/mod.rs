@@ -35,7 +35,7 @@ use firmware::board_map::{FRONTEND, SCANS_PER_SAMPLE};
 use golden::params::golden_params;
 use heapless::Vec;
 use monitor::device::Estimator;
-use monitor::protocol::auth::{acknowledge_frame, Challenger};
+use monitor::protocol::auth::{acknowledge_frame_for, Challenger};
 use monitor::protocol::{CanFrame, IdentityFrame, Node, ResetCause, VersionFrame};
 use qemu_tests::counter::{self, Counter};
 use qemu_tests::{exit, println};
@@ -206,7 +206,7 @@ async fn checker(case: &'static EmuCase, t0: Instant, expect: Expect) {
 /// renewed once per alarm raised before (`EmuCase::ack_rotations`). It
 /// arrives 200 ms after the last alarm change, inside the acknowledge
 /// hold-off: the policy refuses it, the replay is stale.
-fn commands(case: &EmuCase, t0: Instant) -> (Vec<(Instant, CanFrame), 3>, u32) {
+fn commands(case: &EmuCase, t0: Instant, node: Node) -> (Vec<(Instant, CanFrame), 3>, u32) {
     let mut script = Vec::new();
     let Some(ack) = case.ack_sample else {
         return (script, 0);
@@ -218,7 +218,7 @@ fn commands(case: &EmuCase, t0: Instant) -> (Vec<(Instant, CanFrame), 3>, u32) {
     for _ in 0..case.ack_rotations {
         challenger.rotate(0);
     }
-    let frame = acknowledge_frame(&key, challenger.current(), 0);
+    let frame = acknowledge_frame_for(node, &key, challenger.current(), 0);
     let mut data = [0u8; 8];
     data.copy_from_slice(frame.data());
     data[2] ^= 0x01;
@@ -250,26 +250,33 @@ fn check_time_base() -> bool {
 }
 
 /// Replay `case` through the firmware's tasks and check what they do.
-#[allow(dead_code)] // each test binary calls one of the two
+#[allow(dead_code)] // each test binary calls one of these
 pub fn run(case: &'static EmuCase) -> ! {
-    run_with(case, None)
+    run_with(case, None, Node::DEFAULT)
+}
+
+/// [`run`] with the installation's CAN node number `node`: every frame
+/// and the command on the moved identifiers.
+#[allow(dead_code)]
+pub fn run_on_node(case: &'static EmuCase, node: Node) -> ! {
+    run_with(case, None, node)
 }
 
 /// Replay `case` with the board's self-test finding `fault` 100 ms after
 /// the relay was first energised, and check the firmware's reaction.
 #[allow(dead_code)]
 pub fn run_with_fault(case: &'static EmuCase, fault: DeviceFault) -> ! {
-    run_with(case, Some(Injection::SelfTest(fault)))
+    run_with(case, Some(Injection::SelfTest(fault)), Node::DEFAULT)
 }
 
 /// Replay `case` with VREFINT converting to `code` from 100 ms after the
 /// relay was first energised, and check the firmware's reaction.
 #[allow(dead_code)]
 pub fn run_with_vrefint(case: &'static EmuCase, code: u16) -> ! {
-    run_with(case, Some(Injection::Vrefint(code)))
+    run_with(case, Some(Injection::Vrefint(code)), Node::DEFAULT)
 }
 
-fn run_with(case: &'static EmuCase, injection: Option<Injection>) -> ! {
+fn run_with(case: &'static EmuCase, injection: Option<Injection>, node: Node) -> ! {
     assert!(
         case.sample_period_us == app::SAMPLE_PERIOD_US && case.scans as usize == SCANS_PER_SAMPLE,
         "{}: codes generated for another sample period or scan count",
@@ -283,7 +290,8 @@ fn run_with(case: &'static EmuCase, injection: Option<Injection>) -> ! {
         exit(false);
     }
 
-    let params = golden_params(case.sample_period_s, case.warm_up_s);
+    let mut params = golden_params(case.sample_period_s, case.warm_up_s);
+    params.can.node = node.number().into();
     let boot = BootInfo {
         reset_cause: RESET_CAUSE,
         identity: identity(&params),
@@ -295,7 +303,7 @@ fn run_with(case: &'static EmuCase, injection: Option<Injection>) -> ! {
     };
     let source = ReplayAdc::start(case);
     let t0 = record::with(|l| l.t0).expect("t0 set by the ADC");
-    let (script, rejected_commands) = commands(case, t0);
+    let (script, rejected_commands) = commands(case, t0, node);
     let script: &'static Vec<(Instant, CanFrame), 3> =
         cortex_m::singleton!(: Vec<(Instant, CanFrame), 3> = script).expect("one script");
     let expect = Expect {
@@ -343,12 +351,8 @@ fn run_with(case: &'static EmuCase, injection: Option<Injection>) -> ! {
     };
     let supervisor = supervisor(RecordingWatchdog, &RELAY, RecordingLed::new(), self_test);
     low.spawn(supervisor.expect("supervisor task"));
-    low.spawn(can_tx(RecordingCanTx, Node::DEFAULT).expect("CAN transmit task"));
-    let can_rx = can_rx(
-        ScriptedCanRx::new(script.as_slice()),
-        Node::DEFAULT,
-        CHALLENGE_SEED,
-    );
+    low.spawn(can_tx(RecordingCanTx, node).expect("CAN transmit task"));
+    let can_rx = can_rx(ScriptedCanRx::new(script.as_slice()), node, CHALLENGE_SEED);
     low.spawn(can_rx.expect("CAN receive task"));
     match inject {
         None => low.spawn(checker(case, t0, expect).expect("checker task")),

@@ -17,7 +17,9 @@ use monitor::protocol::schedule::{
     ALARM_REFRESH_PHASE_MS, DETAIL_PHASE_MS, HEARTBEAT_PHASE_MS, IDENTITY_PHASE_MS, SLOW_PERIOD_MS,
     STATUS_PERIOD_MS, VERSION_PHASE_MS,
 };
-use monitor::protocol::{AlarmFrame, Decoder, HeartbeatFrame, Message, MessageKind, Sequence};
+use monitor::protocol::{
+    AlarmFrame, Decoder, HeartbeatFrame, Message, MessageKind, Node, Sequence,
+};
 
 use super::{Check, Expect, Findings};
 use crate::emu::case::EmuCase;
@@ -70,10 +72,10 @@ fn due(kind: MessageKind, t_ms: u64, changed: bool) -> bool {
     }
 }
 
-/// Decode every frame; check CRCs, fields and counters.
-fn decode(log: &Log, f: &mut Findings) -> Frames {
+/// Decode every frame of `node`; check CRCs, fields and counters.
+fn decode(log: &Log, node: Node, f: &mut Findings) -> Frames {
     let mut frames = Frames::default();
-    let mut decoder = Decoder::new();
+    let mut decoder = Decoder::for_node(node);
     for (i, sent) in log.frames.iter().enumerate() {
         let t_us = sent.at.as_micros();
         match decoder.decode(&sent.frame) {
@@ -246,7 +248,7 @@ fn stall(case: &EmuCase, log: &Log, frames: &mut Frames, f: &mut Findings) {
 
 /// Decode and check every frame; return them for the other checks.
 pub fn check(case: &EmuCase, log: &Log, expect: &Expect, f: &mut Findings) -> Frames {
-    let mut frames = decode(log, f);
+    let mut frames = decode(log, expect.identity.node, f);
     print(&frames, f);
     for k in [
         MessageKind::Alarm,

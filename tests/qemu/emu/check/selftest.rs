@@ -5,7 +5,7 @@
 use embassy_time::Duration;
 use firmware::app::shared::Shared;
 use monitor::device::alarm::AlarmState;
-use monitor::protocol::{e2e, CanFrame, Decoder, Encoder, Message, MessageKind};
+use monitor::protocol::{e2e, CanFrame, Decoder, Encoder, Message, MessageKind, Node};
 use monitor::LeakSet;
 use qemu_tests::println;
 
@@ -18,7 +18,7 @@ fn nth(log: &Log, kind: MessageKind, nth: usize) -> usize {
     log.frames
         .iter()
         .enumerate()
-        .filter(|(_, s)| s.frame.id() == kind.id())
+        .filter(|(_, s)| MessageKind::locate(s.frame.id()).is_some_and(|(k, _)| k == kind))
         .nth(nth)
         .map(|(i, _)| i)
         .expect("enough frames of the kind")
@@ -37,8 +37,8 @@ fn resend(frame: &CanFrame, msg: &Message) -> CanFrame {
 /// The first alarm frame latching a leak (or, without one, the last
 /// alarm frame before the end), with a wrong announcement: another leak
 /// kind, or a leak where there is none.
-fn wrong_verdict(log: &mut Log, case: &EmuCase) {
-    let alarm = |s: &crate::emu::record::Sent| match Decoder::new().decode(&s.frame) {
+fn wrong_verdict(log: &mut Log, case: &EmuCase, node: Node) {
+    let alarm = |s: &crate::emu::record::Sent| match Decoder::for_node(node).decode(&s.frame) {
         Ok(r) => match r.message {
             Message::Alarm(a) => Some(a),
             _ => None,
@@ -134,7 +134,7 @@ pub fn run(case: &EmuCase, log: &mut Log, shared: &Shared, expect: &Expect) -> b
         log,
         shared,
         expect,
-        |log| wrong_verdict(log, case),
+        |log| wrong_verdict(log, case, expect.identity.node),
         &[Check::Content, Check::Verdict],
     );
     ok &= expect_flagged(
