@@ -74,23 +74,14 @@ impl Load {
         Self {
             gravity_scale: 1.0,
             inertia_scale: 1.0,
+            // The thesis geometry as the independent plant states it; the
+            // reference rig's own masses and (slender-bar) inertias.
             pantograph: LoadSpec {
-                theta1_fit_deg: [162.5, -19.99],
-                theta2_fit_deg: [-664.6, 163.9, 87.71],
-                base_to_r21_y_m: 0.155,
-                r21_to_r1_m: 0.125,
-                r21_to_r3_m: 1.0,
-                r21_to_cg21_m: 0.508,
-                r1_to_cg1_m: 0.186,
-                r1_to_r22_m: 0.365,
-                r22_to_cg22_m: 0.44,
-                r3_to_cg3_m: 1.35,
-                r3_to_tip_m: 2.7,
                 masses_kg: [6.12844, 15.36792, 13.62235, 87.92456],
                 inertias_kg_m2: [0.070_673, 1.321_969, 0.879_096, 53.414_170],
                 payload_kg: 0.0,
                 force_offset_n: 0.0,
-                gravity_m_s2: 9.81,
+                ..LoadSpec::nominal()
             },
         }
     }
