@@ -9,14 +9,14 @@ use monitor::acknowledge::AckResult;
 use monitor::device::alarm::AlarmState;
 use monitor::protocol::auth::{acknowledge_frame, AckKey, KeyKind};
 use monitor::protocol::{
-    AlarmFrame, CanFrame, ChallengeFrame, DetailFrame, Encoder, HeartbeatFrame, Message,
-    ResetCause, StatusFrame,
+    AlarmFrame, CanFrame, ChallengeFrame, DetailFrame, Encoder, HeartbeatFrame, IdentityFrame,
+    Message, Node, ResetCause, StatusFrame, VersionFrame,
 };
 use monitor::{Hypothesis, LeakSet, Verdict};
 use std::fmt::Write as _;
 use std::path::Path;
 
-fn messages(i: usize) -> [Message; 5] {
+fn messages(i: usize) -> [Message; 7] {
     [
         Message::Status(StatusFrame {
             verdict: [Verdict::Healthy, Verdict::Internal, Verdict::External][i % 3],
@@ -53,6 +53,15 @@ fn messages(i: usize) -> [Message; 5] {
             challenge: (i as u32).wrapping_mul(0x9E37_79B9),
             last_ack: AckResult::ALL.get(i % 12).copied(),
             ack_attempts: i as u8,
+        }),
+        Message::Identity(IdentityFrame {
+            node: Node::ALL[i % Node::ALL.len()],
+            params_crc: (i as u32).wrapping_mul(0x2545_F491),
+            params_version: i as u16,
+        }),
+        Message::Version(VersionFrame {
+            firmware: [0, 1, i as u8],
+            link_protocol: 1,
         }),
     ]
 }
@@ -112,7 +121,9 @@ fn main() {
     odd += &candump_line(1_700_000_002.000_6, &frames[1]).replace('\n', " R\n");
     write(&root.join("candump"), "skipped.log", odd.as_bytes());
     let mut gaps = String::new();
-    for k in [0usize, 5, 15, 15, 40] {
+    // Status frames (the first of each group of 7) with counters 0, 1, 3,
+    // 3, 8: two lost, one repeated, five lost.
+    for k in [0usize, 7, 21, 21, 56] {
         gaps += &candump_line(1_700_000_003.0 + k as f64 * 0.01, &frames[k]);
     }
     write(
@@ -125,7 +136,7 @@ fn main() {
     // byte 0: the CRC as encoded).
     let dir = root.join("protocol_decoder");
     let mut seq = Vec::new();
-    for (k, f) in frames.iter().enumerate().take(5) {
+    for (k, f) in frames.iter().enumerate().take(7) {
         let mut one = any_bytes(f);
         one.push(0);
         write(&dir, &format!("kind-{k}"), &one);

@@ -17,10 +17,14 @@
 use crate::{AnyFrame, Cursor};
 use monitor::protocol::{e2e, CanFrame, DecodeError, Decoder, Encoder, MessageKind, Sequence};
 
-/// Bits of the data bytes that `decode` ignores and `encode` writes as 0
-/// (the reserved bits 6–7 of byte 1 of `LM_Detail`: `Leading` is two
-/// bits).
-const IGNORED: [(MessageKind, [u8; 8]); 1] = [(MessageKind::Detail, [0, 0xC0, 0, 0, 0, 0, 0, 0])];
+/// Bits of the data bytes that `decode` ignores and `encode` writes as 0:
+/// the reserved bits 6–7 of byte 1 of `LM_Detail` (`Leading` is two
+/// bits), and the reserved high nibble of byte 1 and bytes 6–7 of
+/// `LM_Version`.
+const IGNORED: [(MessageKind, [u8; 8]); 2] = [
+    (MessageKind::Detail, [0, 0xC0, 0, 0, 0, 0, 0, 0]),
+    (MessageKind::Version, [0, 0xF0, 0, 0, 0, 0, 0xFF, 0xFF]),
+];
 
 fn ignored(kind: MessageKind) -> [u8; 8] {
     IGNORED
