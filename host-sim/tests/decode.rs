@@ -199,6 +199,22 @@ fn several_monitors_on_one_bus_are_decoded_by_node() {
     let text = String::from_utf8(host_sim(&["decode", path]).stdout).unwrap();
     assert!(text.contains("LM_Status@3"), "{text}");
 
+    // The identity frame's CRC in hex, as `params show` prints it.
+    let id = monitor::protocol::IdentityFrame {
+        node: Node::new(3).unwrap(),
+        params_crc: 0x54ea_dda8,
+        params_version: 3,
+    };
+    let f = b.encode(&Message::Identity(id));
+    let one = dir.path().join("identity.log");
+    std::fs::write(&one, line(2_000_000, &f)).unwrap();
+    let text = String::from_utf8(host_sim(&["decode", one.to_str().unwrap()]).stdout).unwrap();
+    assert!(
+        text.contains("LM_Identity@3")
+            && text.contains("Node=3 ParamsCrc=54eadda8 ParamsVersion=3"),
+        "{text}"
+    );
+
     // One node: the other's frames are foreign.
     let out = host_sim(&["decode", "--json", "--node", "3", path]);
     let text = String::from_utf8(out.stdout).unwrap();
