@@ -65,19 +65,31 @@ fn main() {
     };
     // The identity the commissioning link reports for this set (version 0:
     // compiled in), sent on CAN in `LM_Identity`.
-    let mut buf = [0u8; link::storage::PARAMS_MAX];
-    let encoded = link::storage::encode_params(&params, &mut buf)
+    let id = link::storage::params_identity(&params, 0)
         .unwrap_or_else(|| fail("the parameter set does not fit the link's encoding buffer"));
-    let id = link::storage::params_id(encoded, 0);
     code += &format!(
         "/// CRC-32 of the compiled-in set's canonical encoding (its identity).\n\
-         pub const INSTALLATION_CRC: u32 = {:#010x};\n\
-         /// The commissioning link's protocol version.\n\
-         pub const LINK_PROTOCOL: u8 = {};\n",
-        id.crc,
-        link::message::PROTOCOL_VERSION
+         pub const INSTALLATION_CRC: u32 = {:#010x};\n",
+        id.crc
     );
     std::fs::write(out.join("installation.rs"), code).unwrap();
+
+    // What `LM_Version` says: this crate's version (Cargo's numeric parts)
+    // and the commissioning link's protocol version.
+    let part = |name: &str| -> u8 {
+        let v = std::env::var(name).unwrap();
+        v.parse()
+            .unwrap_or_else(|_| fail(&format!("{name} = {v} does not fit LM_Version's byte")))
+    };
+    let version = format!(
+        "/// The firmware's `LM_Version` frame.\n\
+         pub const FRAME: VersionFrame = VersionFrame {{ firmware: [{}, {}, {}], link_protocol: {} }};\n",
+        part("CARGO_PKG_VERSION_MAJOR"),
+        part("CARGO_PKG_VERSION_MINOR"),
+        part("CARGO_PKG_VERSION_PATCH"),
+        link::message::PROTOCOL_VERSION
+    );
+    std::fs::write(out.join("version.rs"), version).unwrap();
 
     println!("cargo:rerun-if-env-changed=LEAK_MONITOR_ACK_KEY");
     let key = match std::env::var("LEAK_MONITOR_ACK_KEY")

@@ -27,6 +27,13 @@ pub mod board;
 /// end, sampling.
 pub use boards::selected as board_map;
 
+/// The firmware's version as `LM_Version` sends it, written by `build.rs`
+/// from Cargo's version of this crate.
+pub mod version {
+    use monitor::protocol::VersionFrame;
+    include!(concat!(env!("OUT_DIR"), "/version.rs"));
+}
+
 /// The acknowledge key, compiled in by `build.rs` from
 /// `LEAK_MONITOR_ACK_KEY` (or the public development key, reported as
 /// such on the bus).

@@ -24,7 +24,7 @@ use firmware::board_map::FRONTEND;
 use monitor::device::diagnostics::brownout;
 use monitor::device::diagnostics::{DeviceFault, DeviceFaults};
 use monitor::device::Estimator;
-use monitor::protocol::{IdentityFrame, VersionFrame};
+use monitor::protocol::IdentityFrame;
 use static_cell::StaticCell;
 use stm32::adc::AdcSampler;
 use stm32::can::{Receiver, Transmitter};
@@ -108,7 +108,7 @@ fn start(spawner: Spawner) {
             params_crc: installation::INSTALLATION_CRC,
             params_version: 0,
         },
-        version: VersionFrame::new(env!("CARGO_PKG_VERSION"), installation::LINK_PROTOCOL),
+        version: firmware::version::FRAME,
     };
     let p = embassy_stm32::init(stm32::clocks::config());
     let Board {

@@ -47,6 +47,13 @@ pub fn decode_params(bytes: &[u8]) -> Option<Params> {
     }
 }
 
+/// The identity of `p` stored as `version` (None: its encoding does not
+/// fit [`PARAMS_MAX`]). Encodes on the stack (`PARAMS_MAX` bytes).
+pub fn params_identity(p: &Params, version: u32) -> Option<ParamsId> {
+    let mut buf = [0u8; PARAMS_MAX];
+    encode_params(p, &mut buf).map(|enc| params_id(enc, version))
+}
+
 /// The identity of the encoding `enc` stored as `version`.
 pub fn params_id(enc: &[u8], version: u32) -> ParamsId {
     ParamsId {

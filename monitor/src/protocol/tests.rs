@@ -52,7 +52,10 @@ pub(crate) fn one_of_each() -> [Message; MessageKind::COUNT] {
             params_crc: 0xFEDC_BA98,
             params_version: 4321,
         }),
-        Message::Version(VersionFrame::new("3.14.15", 2)),
+        Message::Version(VersionFrame {
+            firmware: [3, 14, 15],
+            link_protocol: 2,
+        }),
         Message::Command(CommandFrame {
             command: Command::AcknowledgeAlarm,
             mac: [0xA0, 0xB1, 0xC2, 0xD3, 0xE4, 0xF5],

@@ -36,7 +36,7 @@ use golden::params::golden_params;
 use heapless::Vec;
 use monitor::device::Estimator;
 use monitor::protocol::auth::{acknowledge_frame_for, Challenger};
-use monitor::protocol::{CanFrame, IdentityFrame, Node, ResetCause, VersionFrame};
+use monitor::protocol::{CanFrame, IdentityFrame, Node, ResetCause};
 use qemu_tests::counter::{self, Counter};
 use qemu_tests::{exit, println};
 
@@ -295,7 +295,7 @@ fn run_with(case: &'static EmuCase, injection: Option<Injection>, node: Node) ->
     let boot = BootInfo {
         reset_cause: RESET_CAUSE,
         identity: identity(&params),
-        version: VersionFrame::new(env!("CARGO_PKG_VERSION"), link::message::PROTOCOL_VERSION),
+        version: firmware::version::FRAME,
     };
     let pipeline = match app::estimator::pipeline::<InstructionCounter>(&params, FRONTEND) {
         Ok(e) => cortex_m::singleton!(: Estimator<f32> = e).expect("one estimator"),
@@ -366,12 +366,10 @@ fn run_with(case: &'static EmuCase, injection: Option<Injection>, node: Node) ->
 /// The identity of `params` as the commissioning link computes it
 /// (version 0: compiled in), as the firmware's build script does.
 fn identity(params: &monitor::Params) -> IdentityFrame {
-    let mut buf = [0u8; link::storage::PARAMS_MAX];
-    let encoded =
-        link::storage::encode_params(params, &mut buf).expect("the golden parameters encode");
+    let id = link::storage::params_identity(params, 0).expect("the golden parameters encode");
     IdentityFrame {
         node: params.node(),
-        params_crc: link::storage::params_id(encoded, 0).crc,
+        params_crc: id.crc,
         params_version: 0,
     }
 }
