@@ -413,18 +413,11 @@ fn flag_names(s: &Signal) -> Option<Vec<String>> {
 
 /// A signal for people: bit masks by flag name (`Health=WARMING_UP|DATA_GAP`,
 /// `none` when clear).
-/// Signals that identify rather than measure, shown in hexadecimal as
-/// `host-sim params show` prints them (JSON keeps the number).
-const HEX_SIGNALS: [&str; 1] = ["ParamsCrc"];
-
 fn describe(s: &Signal) -> String {
-    match (flag_names(s), s.value) {
-        (Some(names), _) if names.is_empty() => format!("{}=none", s.name),
-        (Some(names), _) => format!("{}={}", s.name, names.join("|")),
-        (None, SignalValue::Integer { value, .. }) if HEX_SIGNALS.contains(&s.name) => {
-            format!("{}={value:08x}", s.name)
-        }
-        (None, _) => s.to_string(),
+    match flag_names(s) {
+        Some(names) if names.is_empty() => format!("{}=none", s.name),
+        Some(names) => format!("{}={}", s.name, names.join("|")),
+        None => s.to_string(),
     }
 }
 

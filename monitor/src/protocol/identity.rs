@@ -65,7 +65,7 @@ impl IdentityFrame {
     pub fn signals(&self) -> Signals {
         let mut s = SignalList::new();
         s.integer("Node", self.node.number(), "");
-        s.integer("ParamsCrc", self.params_crc, "");
+        s.checksum("ParamsCrc", self.params_crc);
         s.integer("ParamsVersion", self.params_version, "");
         s.done()
     }

@@ -47,6 +47,9 @@ pub enum SignalValue {
         /// Unit (may be empty).
         unit: &'static str,
     },
+    /// A checksum or identity (e.g. a parameter set's CRC-32): an integer
+    /// that is compared, not measured, shown in hexadecimal (8 digits).
+    Checksum(u32),
     /// A one-bit flag.
     Flag(bool),
     /// The sender has no value (the DBC's `not_available` raw code).
@@ -61,6 +64,7 @@ impl SignalValue {
             Self::Quantity { value, .. } => Some(value),
             Self::Enum { code, .. } => Some(code as f64),
             Self::Integer { value, .. } => Some(value as f64),
+            Self::Checksum(value) => Some(f64::from(value)),
             Self::Flag(b) => Some(b as u8 as f64),
             Self::NotAvailable => None,
         }
@@ -83,6 +87,7 @@ impl fmt::Display for Signal {
                 write!(f, "{value}")?;
                 unit
             }
+            SignalValue::Checksum(value) => return write!(f, "{value:08x}"),
             SignalValue::Enum { name, .. } => return write!(f, "{name}"),
             SignalValue::Flag(b) => return write!(f, "{}", b as u8),
             SignalValue::NotAvailable => return write!(f, "n/a"),
@@ -147,6 +152,11 @@ impl SignalList {
                 unit,
             },
         );
+    }
+
+    /// A checksum or identity.
+    pub fn checksum(&mut self, name: &'static str, value: u32) {
+        self.push(name, SignalValue::Checksum(value));
     }
 
     /// A flag.
