@@ -11,9 +11,7 @@
 
 use crate::recording::bounded::{read_line, Exceeded};
 use anyhow::{anyhow, bail, Result};
-use monitor::protocol::{
-    DecodeError, Decoder, E2eError, MessageKind, Node, Received, Sequence, Signal, SignalValue,
-};
+use monitor::protocol::{DecodeError, E2eError, Node, Received, Sequence, Signal, SignalValue};
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::io::{BufRead, Write};
@@ -246,32 +244,6 @@ pub struct FrameRecord {
 
 fn hex(data: &[u8]) -> String {
     data.iter().map(|b| format!("{b:02X}")).collect()
-}
-
-/// The decoders of the nodes decoded: every node, or one.
-#[derive(Clone, Debug)]
-pub struct Nodes {
-    only: Option<Node>,
-    decoders: [Decoder; Node::ALL.len()],
-}
-
-impl Nodes {
-    /// Decode the frames of `only` that node, or of every node.
-    pub fn new(only: Option<Node>) -> Self {
-        Self {
-            only,
-            decoders: Node::ALL.map(Decoder::for_node),
-        }
-    }
-
-    /// The kind, node and decoder of a frame's identifier, if decoded.
-    fn locate(&mut self, id: u32) -> Option<(MessageKind, Node, &mut Decoder)> {
-        let (kind, node) = MessageKind::locate(u16::try_from(id).ok()?)?;
-        if self.only.is_some_and(|n| n != node) {
-            return None;
-        }
-        Some((kind, node, &mut self.decoders[node.number() as usize]))
-    }
 }
 
 fn record(f: &LogFrame, nodes: &mut Nodes) -> FrameRecord {
@@ -606,6 +578,9 @@ pub fn decode_stream(
     }
     Ok(summary)
 }
+
+mod nodes;
+pub use nodes::Nodes;
 
 #[cfg(test)]
 mod tests;
