@@ -133,3 +133,25 @@ pub struct BootInfo {
     /// The firmware's version (`LM_Version`).
     pub version: VersionFrame,
 }
+
+/// The commissioning link's transport went away (USB unplugged or not
+/// configured by a host); the bytes were not sent.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, defmt::Format)]
+pub struct Disconnected;
+
+/// The byte transport of the commissioning link (`link` crate): USB
+/// CDC-ACM on the STM32F405, a UART on the emulated board.
+pub trait SerialPort {
+    /// Wait until a host is connected (at once on a UART).
+    async fn wait_connected(&mut self);
+
+    /// Wait for bytes from the host and copy them into `buf` (at least one
+    /// byte, at most `buf.len()`). Must be cancel-safe: the link task
+    /// drops this future when a block of samples is ready to send, and
+    /// no received byte may be lost by that.
+    async fn read(&mut self, buf: &mut [u8]) -> Result<usize, Disconnected>;
+
+    /// Send all of `bytes`. Waits while the host is slow (the caller
+    /// bounds the wait); `Err` when the host went away.
+    async fn write_all(&mut self, bytes: &[u8]) -> Result<(), Disconnected>;
+}
