@@ -7,7 +7,8 @@
 //! - [`stream`]: blocks of samples, and the host's count of lost blocks;
 //! - [`storage`]: the parameter set and the event queue in flash
 //!   (`sequential-storage`), power-fail safe;
-//! - [`device`]: the device end, transport-agnostic.
+//! - [`device`]: the device end, transport-agnostic;
+//! - [`memory`]: which monitor events the event memory keeps.
 //!
 //! Parameters change only over this link, never over CAN.
 #![cfg_attr(not(any(test, feature = "std")), no_std)]
@@ -15,6 +16,7 @@
 
 pub mod device;
 pub mod frame;
+pub mod memory;
 pub mod message;
 pub mod storage;
 pub mod stream;
@@ -32,5 +34,5 @@ pub use message::{
     EventKind, EventRecord, Identity, Leak, Message, ParamsId, Refusal, ResetCause, SampleBlock,
     WireSample,
 };
-pub use storage::{Loaded, Storage, StoreError};
+pub use storage::{Erase, Loaded, Storage, StoreError};
 pub use stream::{Accept, BlockBuilder, BlockTracker, StreamClock};
