@@ -10,7 +10,7 @@ use crate::message::{
     EventKind, EventRecord, Identity, Message, Refusal, ResetCause, SampleBlock, CHUNK,
     EVENTS_PER_REPLY, PROTOCOL_VERSION,
 };
-use crate::storage::{encode_params, Loaded, Storage, StoreError, PARAMS_MAX};
+use crate::storage::{encode_params, Erase, Loaded, Storage, StoreError, PARAMS_MAX};
 use crate::stream::BlockBuilder;
 use embedded_storage_async::nor_flash::NorFlash;
 use monitor::{Params, Sample};
@@ -46,11 +46,21 @@ pub struct Device<P: NorFlash, E: NorFlash> {
     streaming: bool,
     builder: BlockBuilder,
     changed: bool,
+    /// In-service events that needed a page erase: stored at the next
+    /// upload (out of service), listed after the stored ones meanwhile.
+    pending: heapless::Deque<EventRecord, PENDING>,
+    /// Events lost because `pending` was full (since boot).
+    lost: u32,
 }
 
+/// In-service events kept in RAM while the queue would need an erase.
+pub const PENDING: usize = 16;
+
 impl<P: NorFlash, E: NorFlash> Device<P, E> {
-    /// Boot: pick the newest valid parameter set (else `default`), count
-    /// the boot, record the reset and its cause.
+    /// Boot (out of service: it may erase): pick the newest valid
+    /// parameter set (else `default`), count the boot, record the reset
+    /// and its cause, and leave the event queue room for in-service
+    /// events.
     pub async fn start(
         mut storage: Storage<P, E>,
         info: DeviceInfo,
@@ -60,7 +70,7 @@ impl<P: NorFlash, E: NorFlash> Device<P, E> {
         let active = storage.load_params(default).await;
         let boot = storage.bump_boot().await;
         let _ = storage
-            .append_event(&EventRecord {
+            .append_event_making_room(&EventRecord {
                 boot,
                 uptime_ms: 0,
                 kind: EventKind::Reset { cause },
@@ -83,6 +93,8 @@ impl<P: NorFlash, E: NorFlash> Device<P, E> {
             streaming: false,
             builder: BlockBuilder::new(),
             changed: false,
+            pending: heapless::Deque::new(),
+            lost: 0,
         };
         dev.active_len =
             encode_params(&dev.active.params, &mut dev.active_enc).map_or(0, |e| e.len());
@@ -115,15 +127,41 @@ impl<P: NorFlash, E: NorFlash> Device<P, E> {
         self.storage
     }
 
-    /// Record an event in flash.
+    /// Record an event, in service: in flash at once where that needs no
+    /// page erase, else kept in RAM (up to [`PENDING`]) until the next
+    /// upload stores it. `Err` only when the flash failed or the event
+    /// was lost.
     pub async fn log(&mut self, uptime_ms: u32, kind: EventKind) -> Result<(), StoreError> {
-        self.storage
-            .append_event(&EventRecord {
-                boot: self.boot,
-                uptime_ms,
-                kind,
-            })
-            .await
+        let ev = EventRecord {
+            boot: self.boot,
+            uptime_ms,
+            kind,
+        };
+        if self.pending.is_empty() {
+            match self.storage.append_event(&ev, Erase::Never).await {
+                Err(StoreError::NeedsErase) => {}
+                other => return other,
+            }
+        }
+        self.pending.push_back(ev).map_err(|_| {
+            self.lost = self.lost.saturating_add(1);
+            StoreError::NeedsErase
+        })
+    }
+
+    /// Events waiting for an erase, and events lost since boot.
+    pub fn pending_events(&self) -> (usize, u32) {
+        (self.pending.len(), self.lost)
+    }
+
+    /// Out of service: store the pending events (erasing as needed).
+    async fn flush_pending(&mut self) {
+        while let Some(ev) = self.pending.front() {
+            if self.storage.append_event(ev, Erase::Allowed).await.is_err() {
+                return;
+            }
+            self.pending.pop_front();
+        }
     }
 
     /// The monitor's sample of step `tick`; a completed block to send
@@ -139,6 +177,14 @@ impl<P: NorFlash, E: NorFlash> Device<P, E> {
     /// The block last returned by [`Self::sample`] could not be sent.
     pub fn block_dropped(&mut self) {
         self.builder.dropped();
+    }
+
+    /// The stream's blocks are built elsewhere (the firmware builds them
+    /// in its estimator task, so that a slow host never delays it): take
+    /// over that builder's progress ([`BlockBuilder::completed`],
+    /// [`BlockBuilder::dropped_count`]) for the `StreamEnd` reply.
+    pub fn stream_progress(&mut self, blocks: u32, dropped: u32) {
+        self.builder.set_progress(blocks, dropped);
     }
 
     /// Answer one frame into `out` (at least [`MAX_WIRE`] bytes); returns
@@ -211,9 +257,16 @@ impl<P: NorFlash, E: NorFlash> Device<P, E> {
             Message::EventsRead { skip } => {
                 let mut events = heapless::Vec::<EventRecord, EVENTS_PER_REPLY>::new();
                 match self.storage.read_events(*skip, &mut events).await {
-                    Ok(total) => {
+                    Ok(stored) => {
+                        // The pending events follow the stored ones.
+                        let from = skip.saturating_sub(stored) as usize;
+                        for ev in self.pending.iter().skip(from) {
+                            if events.push(*ev).is_err() {
+                                break;
+                            }
+                        }
                         let msg = Message::Events {
-                            total,
+                            total: stored + self.pending.len() as u32,
                             skip: *skip,
                             events,
                         };
@@ -275,8 +328,18 @@ impl<P: NorFlash, E: NorFlash> Device<P, E> {
         self.active_enc[..len].copy_from_slice(&self.upload.buf[..len]);
         self.active_len = len;
         self.changed = true;
+        // Still out of service (the monitor restarts on the new set).
+        self.flush_pending().await;
         let _ = self
-            .log(uptime_ms, EventKind::ParamsChanged { params: id })
+            .storage
+            .append_event(
+                &EventRecord {
+                    boot: self.boot,
+                    uptime_ms,
+                    kind: EventKind::ParamsChanged { params: id },
+                },
+                Erase::Allowed,
+            )
             .await;
         self.identity(seq, out)
     }

@@ -21,6 +21,8 @@ pub struct RamFlash<const PAGE: usize> {
     pub cut_after: Option<u64>,
     /// Word writes and page erases done so far.
     pub ops: u64,
+    /// Page erases done so far.
+    pub erases: u64,
     dead: bool,
 }
 
@@ -41,6 +43,7 @@ impl<const PAGE: usize> RamFlash<PAGE> {
             data: vec![0xFF; pages * PAGE],
             cut_after: None,
             ops: 0,
+            erases: 0,
             dead: false,
         }
     }
@@ -52,6 +55,7 @@ impl<const PAGE: usize> RamFlash<PAGE> {
             data,
             cut_after: None,
             ops: 0,
+            erases: 0,
             dead: false,
         }
     }
@@ -137,6 +141,7 @@ impl<const PAGE: usize> NorFlash for RamFlash<PAGE> {
                 return Err(PowerCut);
             }
             self.data[page..page + PAGE].fill(0xFF);
+            self.erases += 1;
         }
         Ok(())
     }

@@ -15,6 +15,14 @@
 //! - a **queue** (its own flash range) of [`EventRecord`]s, oldest first;
 //!   when full, the oldest page is erased (the queue keeps at least all
 //!   pages but one).
+//!
+//! Erasing a page stalls the STM32F405 (single flash bank: every
+//! instruction fetch waits, 0.25–2 s per sector), so erases happen only
+//! out of service, at boot and during an upload ([`Erase::Allowed`]). In
+//! service, an event is appended only where no erase is needed
+//! ([`Erase::Never`]); at boot the queue moves to a fresh page when fewer
+//! than [`EVENT_RESERVE`] bytes are left, so that in-service events find
+//! room.
 
 use crate::frame::CRC32;
 use crate::message::{EventRecord, ParamsId, MAX_EVENT_BYTES};
@@ -33,6 +41,19 @@ const SLOT_HEADER: usize = 8;
 const BUF: usize = PARAMS_MAX + SLOT_HEADER + 40;
 /// Map key of the boot counter.
 const BOOT_KEY: u8 = 2;
+/// Bytes of event queue that boot leaves free for in-service appends
+/// (about 25 events, each stored in 32–40 bytes with its header).
+pub const EVENT_RESERVE: usize = 1024;
+
+/// May a storage operation erase a flash page?
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Erase {
+    /// Yes: out of service (boot, an upload).
+    Allowed,
+    /// No: in service, where a stalled core would miss its deadlines.
+    Never,
+}
 
 /// The canonical encoding of `p` in `out`.
 pub fn encode_params<'o>(p: &Params, out: &'o mut [u8]) -> Option<&'o [u8]> {
@@ -85,6 +106,8 @@ pub enum StoreError {
     TooLarge,
     /// The set read back differs from the one written.
     ReadBack,
+    /// Storing it needs a page erase, and erases were not allowed.
+    NeedsErase,
     /// Any other error of the storage crate.
     Other,
 }
@@ -211,14 +234,53 @@ impl<P: NorFlash, E: NorFlash> Storage<P, E> {
         new
     }
 
-    /// Append an event. When this returns `Ok`, the event is in flash.
-    pub async fn append_event(&mut self, ev: &EventRecord) -> Result<(), StoreError> {
+    /// Append an event, erasing the oldest page for room only if `erase`
+    /// allows it (else [`StoreError::NeedsErase`]). When this returns
+    /// `Ok`, the event is in flash.
+    pub async fn append_event(&mut self, ev: &EventRecord, erase: Erase) -> Result<(), StoreError> {
         let mut bytes = [0u8; MAX_EVENT_BYTES];
         let n = postcard::to_slice(ev, &mut bytes)
             .map_err(|_| StoreError::TooLarge)?
             .len();
-        self.events.push(&bytes[..n], true).await?;
+        self.push_event(&bytes[..n], erase).await
+    }
+
+    /// Bytes of event items (each with its few bytes of header) that can
+    /// be appended before the queue needs an erase, at least: the rest of
+    /// its current page, or a whole page when the next one is erased.
+    pub async fn event_room(&mut self) -> Result<usize, StoreError> {
+        Ok(self.events.find_max_fit().await?.unwrap_or(0) as usize)
+    }
+
+    /// Out of service: append `ev`, and when fewer than [`EVENT_RESERVE`]
+    /// bytes are left before the queue would need an erase, store it
+    /// padded past them, so that it starts a freshly erased page now and
+    /// in-service events find room later. (The padding is zeros after
+    /// the record, which its decoding ignores.)
+    pub async fn append_event_making_room(&mut self, ev: &EventRecord) -> Result<(), StoreError> {
+        let fit = self.event_room().await?;
+        let whole_page = E::ERASE_SIZE - 2 * E::WRITE_SIZE.max(E::READ_SIZE);
+        if fit >= EVENT_RESERVE || fit >= whole_page {
+            return self.append_event(ev, Erase::Allowed).await;
+        }
+        // Longer than what fits: the queue moves on to the next page.
+        let padded = (fit + 1).max(MAX_EVENT_BYTES).min(self.slot.len());
+        self.slot[..padded].fill(0);
+        postcard::to_slice(ev, &mut self.slot[..MAX_EVENT_BYTES])
+            .map_err(|_| StoreError::TooLarge)?;
+        let (events, slot) = (&mut self.events, &self.slot);
+        events.push(&slot[..padded], true).await?;
         Ok(())
+    }
+
+    async fn push_event(&mut self, bytes: &[u8], erase: Erase) -> Result<(), StoreError> {
+        match self.events.push(bytes, erase == Erase::Allowed).await {
+            Ok(()) => Ok(()),
+            Err(sequential_storage::Error::FullStorage) if erase == Erase::Never => {
+                Err(StoreError::NeedsErase)
+            }
+            Err(e) => Err(e.into()),
+        }
     }
 
     /// Events oldest first: skip `skip`, then fill `out` up to its

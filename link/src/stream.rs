@@ -67,6 +67,18 @@ impl BlockBuilder {
         self.dropped
     }
 
+    /// Take over the progress of a builder running elsewhere: `blocks`
+    /// completed (sent or dropped) and `dropped` of them dropped.
+    pub fn set_progress(&mut self, blocks: u32, dropped: u32) {
+        self.next_seq = blocks;
+        self.dropped = dropped;
+    }
+
+    /// Blocks completed so far (sent or dropped).
+    pub fn completed(&self) -> u32 {
+        self.next_seq
+    }
+
     /// The last sequence number assigned, `u32::MAX` if none.
     pub fn last_seq(&self) -> u32 {
         self.next_seq.wrapping_sub(1)

@@ -7,7 +7,7 @@
 use embassy_futures::block_on;
 use link::message::{EventKind, EventRecord, ParamsId, ResetCause};
 use link::ram_flash::RamFlash;
-use link::storage::{encode_params, Storage, PARAMS_MAX};
+use link::storage::{encode_params, Erase, Storage, PARAMS_MAX};
 use monitor::Params;
 
 /// Small pages so that uploads and appends cross pages (copy and erase)
@@ -149,7 +149,7 @@ fn event_append_survives_a_cut_after_every_word() {
             let mut e = ef.clone();
             e.cut_after = Some(k);
             let mut s = storage(pf.clone(), e);
-            let r = block_on(s.append_event(&ev));
+            let r = block_on(s.append_event(&ev, Erase::Allowed));
             let (_, mut e) = s.into_flash();
             if !e.is_dead() {
                 r.expect("append without a cut");
@@ -186,7 +186,7 @@ fn event_append_survives_a_cut_after_every_word() {
                 );
             }
             // Appending again works.
-            block_on(s.append_event(&ev)).expect("append after the cut");
+            block_on(s.append_event(&ev, Erase::Allowed)).expect("append after the cut");
             let again = read_all(&mut s);
             assert_eq!(again.last(), Some(&ev));
             k += 1;
