@@ -28,6 +28,7 @@ use crate::params::{ParamError, Params};
 use crate::protocol::schedule::{Due, FrameScheduler};
 use crate::protocol::{AlarmFrame, Command, DetailFrame, StatusFrame};
 use crate::real::Real;
+use crate::sample::Sample;
 use crate::signal::frontend::{Frontend, FrontendConfig};
 use crate::status::Status;
 
@@ -51,6 +52,11 @@ pub struct Inputs {
 pub struct Outputs {
     /// Time of this sample on the sample clock, ms.
     pub t_ms: u64,
+    /// The sample's index on the sample clock (0 for the first).
+    pub index: u64,
+    /// The sample the monitor stepped (for the commissioning link's
+    /// stream: what the monitor sees, validity included).
+    pub sample: Sample,
     /// Samples lost before this one (after an overrun).
     pub lost: Option<u32>,
     /// The command's outcome, if one was given.
@@ -170,7 +176,8 @@ impl<T: Real> Estimator<T> {
         let acknowledged = inputs.command.map(|c| match c {
             Command::AcknowledgeAlarm => self.monitor.acknowledge(),
         });
-        let status = self.monitor.step(&acquired.sample);
+        let sample = acquired.sample;
+        let status = self.monitor.step(&sample);
 
         self.stalled |= inputs.stalled;
         let alarm = AlarmOutput::of(&status, self.stalled).with_device_faults(inputs.device_faults);
@@ -182,6 +189,8 @@ impl<T: Real> Estimator<T> {
         let due = self.schedule.due(t_ms, alarm_changed);
         Outputs {
             t_ms,
+            index,
+            sample,
             lost,
             acknowledged,
             status,
@@ -191,6 +200,14 @@ impl<T: Real> Estimator<T> {
             alarm_frame: AlarmFrame::new(&alarm, self.changed_at_ms),
             due,
         }
+    }
+
+    /// Restart the monitor on a new parameter set (its filters warm up
+    /// again, latched alarms are gone); the sample clock, the deadline
+    /// figures and the frame schedule run on. On `Err` nothing changed.
+    pub fn reconfigure(&mut self, params: &Params) -> Result<(), ParamError> {
+        self.monitor = Monitor::new(params)?;
+        Ok(())
     }
 
     /// The block just processed took `busy_cycles`; returns true if that
@@ -226,6 +243,37 @@ mod tests {
 
     fn estimator() -> Estimator<f32> {
         Estimator::new(&Params::nominal(), config(Input::NotFitted), 1000, 168_000).unwrap()
+    }
+
+    #[test]
+    fn reconfigure_restarts_the_monitor_but_not_the_clock() {
+        let mut e = estimator();
+        let first = e.on_block(&[0; 28], &Inputs::default()).status;
+        for _ in 0..200 {
+            e.on_block(&[0; 28], &Inputs::default());
+        }
+        let before = e.clone();
+        let mut bad = Params::nominal();
+        bad.cylinder.stroke_m = -1.0;
+        assert!(e.reconfigure(&bad).is_err());
+        assert_eq!(
+            e.monitor().filter_states().is_some(),
+            before.monitor().filter_states().is_some()
+        );
+        e.reconfigure(&Params::nominal()).unwrap();
+        let out = e.on_block(&[0; 28], &Inputs::default());
+        assert_eq!(
+            (out.index, out.t_ms),
+            (201, 201),
+            "the sample clock runs on"
+        );
+        assert!(!out.first);
+        // The monitor is where a fresh one is after its first sample.
+        assert_eq!(out.status.events, first.events);
+        assert_eq!(out.status.health, first.health);
+        let mut old = before;
+        let kept = old.on_block(&[0; 28], &Inputs::default()).status;
+        assert!(kept.events != first.events || kept.health != first.health);
     }
 
     #[test]
