@@ -1,19 +1,23 @@
 //! The estimator task (high priority): moves one ADC block per millisecond
 //! through `monitor::device::Estimator` (front end → acknowledge →
 //! `Monitor::step` → alarm output → frames due) and carries out what it
-//! returns: relay, frames into the outbox, log lines into a queue. It
-//! decides nothing itself and never waits for anything but the next block.
+//! returns: relay, frames into the outbox, log lines and event-memory
+//! records into queues, the sample into the commissioning link's stream.
+//! It decides nothing itself and never waits for anything but the next
+//! block.
 
 use core::sync::atomic::Ordering;
 
 use embassy_time::Instant;
-use monitor::acknowledge::AckEvent;
+use monitor::acknowledge::{AckEvent, AckResult};
 use monitor::device::estimator::{Estimator, Inputs};
 use monitor::params::{ParamError, Params};
 use monitor::protocol::{HeartbeatFrame, Message};
 use monitor::signal::frontend::FrontendConfig;
 
+use super::link::uptime_ms;
 use super::shared::{LogEvent, Shared};
+use super::stream::StreamTap;
 use super::SAMPLE_PERIOD_US;
 use crate::board::{BootInfo, CycleCounter, Overrun, RelayOutput, SampleSource};
 
@@ -34,10 +38,11 @@ pub async fn run<S: SampleSource, R: RelayOutput, C: CycleCounter>(
     relay: &R,
     cycles: C,
     estimator: &mut Estimator<f32>,
-    boot: BootInfo,
+    mut boot: BootInfo,
     shared: &Shared,
 ) -> ! {
     relay.set_energised(false);
+    let mut tap = StreamTap::new();
     let mut first_block: Option<Instant> = None;
     let mut overran = false;
     let mut dropped_before = shared.can.dropped.load(Ordering::Relaxed);
@@ -66,8 +71,15 @@ pub async fn run<S: SampleSource, R: RelayOutput, C: CycleCounter>(
             overrun_at_us: core::mem::take(&mut overran)
                 .then(|| Instant::now().duration_since(t0).as_micros()),
         };
+        if let Some(set) = shared.take_new_set() {
+            // Validated by the link; a refusal here keeps the old set.
+            if estimator.reconfigure(&set.params).is_ok() {
+                boot.identity = set.identity;
+            }
+        }
         let out = estimator.on_block(raw, &inputs);
         shared.pass(super::supervisor::ESTIMATOR);
+        tap.push(&shared.stream, out.index as u32, &out.sample);
         let t_ms = out.t_ms;
         relay.set_energised(out.relay_energised());
 
@@ -81,6 +93,9 @@ pub async fn run<S: SampleSource, R: RelayOutput, C: CycleCounter>(
                 t_ms,
                 outcome: outcome.result(),
             });
+            if outcome.result() == AckResult::Accepted {
+                shared.remember((uptime_ms(), link::EventKind::Acknowledged));
+            }
         }
         for &event in out.status.events.iter() {
             if let monitor::Event::AlarmRaised(_) = event {
@@ -88,6 +103,9 @@ pub async fn run<S: SampleSource, R: RelayOutput, C: CycleCounter>(
                 shared.alarm_raised();
             }
             shared.log(LogEvent::Monitor { t_ms, event });
+            if let Some(kind) = link::memory::event_kind(&event, &out.status) {
+                shared.remember((uptime_ms(), kind));
+            }
         }
         if out.alarm_changed || out.first {
             // The frame and the LED state only change with the output.

@@ -5,7 +5,9 @@
 pub mod can_rx;
 pub mod can_tx;
 pub mod estimator;
+pub mod link;
 pub mod shared;
+pub mod stream;
 pub mod supervisor;
 
 /// Sample period, µs (1 kHz).
@@ -58,6 +60,28 @@ macro_rules! app_tasks {
         #[embassy_executor::task]
         async fn can_rx(rx: $can_rx, node: ::monitor::protocol::Node, challenge_seed: u64) {
             $crate::app::can_rx::run(rx, node, &$shared, challenge_seed).await
+        }
+    };
+}
+
+/// The commissioning link's task (`link`) for one board: its serial port
+/// and the flash partitions of the parameters and the events, with the
+/// caller's `static` [`shared::Shared`].
+#[macro_export]
+macro_rules! app_link_task {
+    (
+        shared: $shared:path,
+        serial: $serial:ty,
+        params_flash: $params_flash:ty,
+        events_flash: $events_flash:ty $(,)?
+    ) => {
+        #[embassy_executor::task]
+        async fn link(
+            port: $serial,
+            device: &'static mut ::link::Device<$params_flash, $events_flash>,
+            node: ::monitor::protocol::Node,
+        ) {
+            $crate::app::link::run(port, device, node, &$shared).await
         }
     };
 }

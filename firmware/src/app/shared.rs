@@ -14,8 +14,22 @@ use monitor::device::alarm::AlarmOutput;
 use monitor::device::deadline::LoadReport;
 use monitor::device::diagnostics::flow::Checkpoint;
 use monitor::device::diagnostics::{DeviceFault, DeviceFaults};
+use monitor::params::Params;
 use monitor::protocol::outbox::Outbox;
-use monitor::protocol::{AlarmFrame, Command, Message};
+use monitor::protocol::{AlarmFrame, Command, IdentityFrame, Message};
+
+use super::stream::SampleStream;
+
+/// A parameter set the link task stored and the estimator must run on.
+pub struct NewSet {
+    /// The set (validated by the link's device).
+    pub params: Params,
+    /// Its `LM_Identity`.
+    pub identity: IdentityFrame,
+}
+
+/// Events on their way to the event memory: ms since boot and the event.
+pub type MemoryEvent = (u32, link::EventKind);
 
 /// Something worth a log line, from the estimator (logged by the
 /// supervisor, so the estimator never waits for the log).
@@ -112,6 +126,11 @@ pub struct Shared {
     pub can: CanStats,
     /// Acknowledge attempts and alarms raised.
     pub ack: AckShared,
+    /// Sample blocks for the commissioning link.
+    pub stream: SampleStream,
+    new_set: Signal<CriticalSectionRawMutex, NewSet>,
+    memory: Channel<CriticalSectionRawMutex, MemoryEvent, 8>,
+    memory_dropped: AtomicU32,
 }
 
 impl Default for Shared {
@@ -186,6 +205,10 @@ impl Shared {
                 raised: AtomicU32::new(0),
                 changed: Signal::new(),
             },
+            stream: SampleStream::new(),
+            new_set: Signal::new(),
+            memory: Channel::new(),
+            memory_dropped: AtomicU32::new(0),
         }
     }
 
@@ -240,6 +263,34 @@ impl Shared {
     /// Log events dropped because the log was full (wrapping).
     pub fn log_dropped(&self) -> u32 {
         self.log_dropped.load(Ordering::Relaxed)
+    }
+
+    /// Link task: run the monitor on a new parameter set.
+    pub fn reconfigure(&self, set: NewSet) {
+        self.new_set.signal(set);
+    }
+
+    /// Estimator: the new parameter set to run on, if one came.
+    pub fn take_new_set(&self) -> Option<NewSet> {
+        self.new_set.try_take()
+    }
+
+    /// Estimator: an event for the event memory (dropped and counted if
+    /// the queue is full; never waits).
+    pub fn remember(&self, e: MemoryEvent) {
+        if self.memory.try_send(e).is_err() {
+            self.memory_dropped.fetch_add(1, Ordering::Relaxed);
+        }
+    }
+
+    /// Link task: the next event for the event memory.
+    pub async fn next_memory(&self) -> MemoryEvent {
+        self.memory.receive().await
+    }
+
+    /// Events dropped on their way to the event memory (wrapping).
+    pub fn memory_dropped(&self) -> u32 {
+        self.memory_dropped.load(Ordering::Relaxed)
     }
 
     /// Remember the alarm frame last built by the estimator.
