@@ -11,6 +11,10 @@
 //!   FRONTEND`), rounded to a quarter code: the resolution of 4× averaged
 //!   12-bit conversions. The board splits it into 4 codes that differ by
 //!   at most 1. A missing reading becomes 0 (a dead loop).
+//! - `NAME.samples.csv`: the samples the host's pipeline stepped for
+//!   those codes, as recording columns: what the commissioning link must
+//!   stream (`scripts/qemu-link-e2e.sh` compares `host-sim record`'s
+//!   capture with it);
 //! - `NAME.reference.bin`: per sample, what the host computes from those
 //!   codes through the firmware's own pipeline, `monitor::device::
 //!   Estimator::on_block` (with the acknowledge command at the sample the
@@ -88,6 +92,8 @@ struct Run {
     /// Samples at which an alarm was raised (each renews the firmware's
     /// acknowledge challenge).
     raised: Vec<u32>,
+    /// The samples the monitor stepped (what the link streams).
+    samples: Vec<Sample>,
 }
 
 fn run(input: &Input<'_>, codes: &[[u16; 7]], frontend: FrontendConfig, ack: Option<u32>) -> Run {
@@ -101,6 +107,7 @@ fn run(input: &Input<'_>, codes: &[[u16; 7]], frontend: FrontendConfig, ack: Opt
         alarms: Vec::new(),
         events: Vec::new(),
         raised: Vec::new(),
+        samples: Vec::with_capacity(codes.len()),
     };
     for (k, sums) in codes.iter().enumerate() {
         let k = k as u32;
@@ -109,6 +116,7 @@ fn run(input: &Input<'_>, codes: &[[u16; 7]], frontend: FrontendConfig, ack: Opt
             ..Inputs::default()
         };
         let o = estimator.on_block(&block(sums), &inputs);
+        out.samples.push(o.sample);
         for e in &o.status.events {
             out.events.push((k, event_code(e)));
             if let monitor::Event::AlarmRaised(_) = e {
@@ -129,6 +137,30 @@ fn run(input: &Input<'_>, codes: &[[u16; 7]], frontend: FrontendConfig, ack: Opt
 
 fn sample_codes(cfg: &FrontendConfig, s: &Sample) -> [u16; 7] {
     core::array::from_fn(|i| code_sum(cfg, i, s.get(Channel::ALL[i])))
+}
+
+/// The samples as the columns of a recording (`recording-csv.md`), each
+/// value the f32 the monitor stepped in its shortest exact decimal form
+/// (an empty field for a reading the front end marked invalid), `t` from
+/// the first sample: what `host-sim record` must capture from the
+/// firmware's stream, up to the recording's printed precision
+/// (`scripts/compare-recording.py`).
+fn samples_csv(samples: &[Sample]) -> String {
+    let temp = samples.iter().any(|s| s.temp_oil_c.is_some());
+    let mut csv = String::from("t,p_supply,p_piston,p_rod,p_tank,x_piston,u_valve");
+    csv.push_str(if temp { ",temp_oil\n" } else { "\n" });
+    for (k, s) in samples.iter().enumerate() {
+        write!(csv, "{}", k as f64 * f64::from(SAMPLE_PERIOD_US) * 1e-6).unwrap();
+        let channels = if temp { 7 } else { 6 };
+        for &ch in &Channel::ALL[..channels] {
+            match s.get(ch).filter(|v| v.is_finite()) {
+                Some(v) => write!(csv, ",{v:?}").unwrap(),
+                None => csv.push(','),
+            }
+        }
+        csv.push('\n');
+    }
+    csv
 }
 
 /// Write the files of the case `name` and return its `EmuCase` source.
@@ -168,6 +200,11 @@ pub fn case(
     std::fs::write(&codes_path, bytes).unwrap();
     let reference_path = out.join(format!("{name}.reference.bin"));
     std::fs::write(&reference_path, &r.reference).unwrap();
+    std::fs::write(
+        out.join(format!("{name}.samples.csv")),
+        samples_csv(&r.samples),
+    )
+    .unwrap();
 
     let mut src = String::new();
     let upper = name.to_uppercase().replace(['-', '.'], "_");
