@@ -246,3 +246,94 @@ fn record_and_upload_over_a_serial_port() {
     bridge.join().unwrap();
     drop(slave);
 }
+
+/// The `tcp:HOST:PORT` path (how host-sim reaches the emulated board's
+/// UART in QEMU, `-chardev socket,…,server=on`): the simulated device
+/// behind a TCP listener on this host, one connection per `host-sim` run
+/// as QEMU serves them.
+#[test]
+fn record_and_upload_over_tcp() {
+    use std::io::{ErrorKind, Read, Write};
+    use std::net::TcpListener;
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::sync::Arc;
+    use std::time::Duration;
+
+    let dir = tempfile::tempdir().unwrap();
+    let input = simulate(dir.path(), "1");
+    let listener = TcpListener::bind("127.0.0.1:0").unwrap();
+    listener.set_nonblocking(true).unwrap();
+    let port = format!("tcp:{}", listener.local_addr().unwrap());
+    let want = samples(&input);
+    let cfg = link::sim::SimConfig {
+        firmware: "9.9.9",
+        serial: "TCP-7".into(),
+        period_us: 1000,
+        source: Box::new(move |tick| want.get(tick as usize).copied()),
+        state: None,
+        drop_every: None,
+        corrupt_every: None,
+        default: Params::nominal(),
+    };
+    let mut dev = link::sim::spawn(cfg).unwrap();
+    dev.timeout = Duration::from_millis(5);
+    let stop = Arc::new(AtomicBool::new(false));
+    // One thread accepts each connection in turn and moves bytes both
+    // ways between it and the device until the host closes it.
+    let s2 = stop.clone();
+    let bridge = std::thread::spawn(move || {
+        let mut buf = [0u8; 4096];
+        while !s2.load(Ordering::SeqCst) {
+            let mut conn = match listener.accept() {
+                Ok((c, _)) => c,
+                Err(e) if e.kind() == ErrorKind::WouldBlock => {
+                    std::thread::sleep(Duration::from_millis(5));
+                    continue;
+                }
+                Err(e) => panic!("accept: {e}"),
+            };
+            conn.set_nonblocking(false).unwrap();
+            conn.set_read_timeout(Some(Duration::from_millis(5)))
+                .unwrap();
+            loop {
+                match conn.read(&mut buf) {
+                    Ok(0) => break,
+                    Ok(n) => dev.write_all(&buf[..n]).unwrap(),
+                    Err(e) if matches!(e.kind(), ErrorKind::WouldBlock | ErrorKind::TimedOut) => {}
+                    Err(_) => break,
+                }
+                while let Ok(n @ 1..) = dev.read(&mut buf) {
+                    if conn.write_all(&buf[..n]).is_err() {
+                        break;
+                    }
+                }
+            }
+        }
+    });
+    let out = dir.path().join("tcp.csv");
+    let err = record(&port, &out, "1");
+    assert!(err.contains("lost blocks: 0 of 100"), "{err}");
+    assert!(err.contains("firmware 9.9.9 serial TCP-7"), "{err}");
+    assert_eq!(samples(out.to_str().unwrap()), samples(&input));
+    let good = dir.path().join("site.toml");
+    std::fs::write(&good, "[valve]\nnull_offset = 0.003\n").unwrap();
+    let (up, _) = ok(&["params", "upload", &port, good.to_str().unwrap()]);
+    assert!(up.starts_with("active: parameter set version 1 "), "{up}");
+    let (show, _) = ok(&["params", "show", &port]);
+    assert!(show.starts_with("# parameter set version 1 "), "{show}");
+    let shown: Params = toml::from_str(&show).unwrap();
+    assert_eq!(shown, host_sim::load_params(&good).unwrap());
+    stop.store(true, Ordering::SeqCst);
+    bridge.join().unwrap();
+}
+
+#[test]
+fn a_tcp_port_nobody_listens_on_is_a_clear_error() {
+    let free = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let port = format!("tcp:{}", free.local_addr().unwrap());
+    drop(free);
+    let o = host_sim(&["params", "show", &port]);
+    assert!(!o.status.success());
+    let err = text(&o.stderr);
+    assert!(err.contains(&format!("{port}: cannot connect")), "{err}");
+}

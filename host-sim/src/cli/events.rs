@@ -10,7 +10,8 @@ use std::process::ExitCode;
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// Serial port of the device, or `sim:…` (see `record --help`).
+    /// Serial port of the device, `tcp:HOST:PORT` or `sim:…` (see
+    /// `record --help`).
     port: String,
     /// One JSON object on stdout instead of a table.
     #[arg(long)]

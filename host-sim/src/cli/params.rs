@@ -23,7 +23,8 @@ pub enum Action {
 
 #[derive(clap::Args)]
 pub struct UploadArgs {
-    /// Serial port of the device, or `sim:…` (see `record --help`).
+    /// Serial port of the device, `tcp:HOST:PORT` or `sim:…` (see
+    /// `record --help`).
     port: String,
     /// Parameter file (TOML, as written by `calibrate`).
     file: PathBuf,
@@ -31,7 +32,8 @@ pub struct UploadArgs {
 
 #[derive(clap::Args)]
 pub struct ShowArgs {
-    /// Serial port of the device, or `sim:…` (see `record --help`).
+    /// Serial port of the device, `tcp:HOST:PORT` or `sim:…` (see
+    /// `record --help`).
     port: String,
 }
 

@@ -14,7 +14,9 @@ use std::time::Duration;
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// Serial port of the device (`/dev/ttyACM0`, `COM3`), or
+    /// Serial port of the device (`/dev/ttyACM0`, `COM3`),
+    /// `tcp:HOST:PORT` for a serial port served over TCP (the emulated
+    /// board in QEMU, e.g. `tcp:127.0.0.1:4567`), or
     /// `sim:[RECORDING.csv][?state=FILE&drop=N&corrupt=N]` for the
     /// simulated device.
     port: String,
