@@ -146,7 +146,10 @@ fn main() -> ! {
         id.as_ref().is_ok_and(|id| id.version == 1),
         "upload stored as version 1: {id:?}"
     );
-    check!(now(s.append_event(&ev)).is_ok(), "event stored");
+    check!(
+        now(s.append_event(&ev, link::Erase::Never)).is_ok(),
+        "event stored"
+    );
 
     // "Reboot": a new storage on the flashes as they are.
     let (p, e) = s.into_flash();

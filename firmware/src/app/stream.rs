@@ -59,6 +59,11 @@ impl SampleStream {
         }
     }
 
+    /// Is a host streaming?
+    pub fn is_streaming(&self) -> bool {
+        self.on.load(Ordering::Acquire)
+    }
+
     /// Link task: a block taken from the queue could not be sent.
     pub fn lost(&self) {
         self.dropped.fetch_add(1, Ordering::AcqRel);

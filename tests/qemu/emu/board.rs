@@ -38,6 +38,8 @@ pub struct ReplayAdc {
     t0: Instant,
     next: u32,
     block: [u16; BLOCK_LEN],
+    /// Start the recording over after its last block, for ever.
+    looping: bool,
 }
 
 impl ReplayAdc {
@@ -51,6 +53,17 @@ impl ReplayAdc {
             t0,
             next: 0,
             block: [0; BLOCK_LEN],
+            looping: false,
+        }
+    }
+
+    /// [`Self::start`], the recording played over and over: the ADC
+    /// never stops.
+    #[allow(dead_code)] // the upload test's only
+    pub fn start_looping(case: &'static EmuCase) -> Self {
+        Self {
+            looping: true,
+            ..Self::start(case)
         }
     }
 
@@ -67,7 +80,7 @@ impl ReplayAdc {
 
 impl SampleSource for ReplayAdc {
     async fn next_block(&mut self) -> Result<&[u16], Overrun> {
-        if self.next >= self.case.samples {
+        if self.next >= self.case.samples && !self.looping {
             pending::<()>().await;
         }
         let due = self.t0 + BLOCK_PERIOD * self.next;
@@ -76,11 +89,15 @@ impl SampleSource for ReplayAdc {
         if complete >= self.next as u64 + RING_BLOCKS {
             // Overwritten before it was read (a whole ring behind):
             // report it, then continue with the latest complete block.
-            self.next = (complete as u32).min(self.case.samples);
+            self.next = if self.looping {
+                complete as u32
+            } else {
+                (complete as u32).min(self.case.samples)
+            };
             record::with(|l| l.overruns += 1);
             return Err(Overrun);
         }
-        self.fill(self.next);
+        self.fill(self.next % self.case.samples);
         self.next += 1;
         record::with(|l| l.blocks += 1);
         Ok(&self.block)

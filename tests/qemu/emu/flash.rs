@@ -12,6 +12,8 @@
 //!
 //! Not `MultiwriteNorFlash`: `link::storage` does not need to program a
 //! word twice, and the board's flash driver does not promise it either.
+// Each test binary uses a part of the emulated board.
+#![allow(dead_code)]
 
 use embedded_storage_async::nor_flash::{ErrorType, NorFlash, NorFlashErrorKind, ReadNorFlash};
 

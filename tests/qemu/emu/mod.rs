@@ -19,13 +19,17 @@
 mod board;
 pub mod case;
 mod check;
+mod flash;
+mod linked;
 mod logger;
 mod record;
 mod time_driver;
+mod uart;
 
 use cortex_m::interrupt::InterruptNumber;
+use cortex_m::peripheral::NVIC;
 use cortex_m_rt::exception;
-use embassy_executor::InterruptExecutor;
+use embassy_executor::{InterruptExecutor, SendSpawner};
 use embassy_time::{Duration, Instant, Timer};
 use firmware::app;
 use firmware::app::shared::Shared;
@@ -97,6 +101,7 @@ unsafe fn DefaultHandler(irqn: i16) {
         match irqn {
             n if n == Irq::Estimator as i16 => EXECUTOR_HIGH.on_interrupt(),
             n if n == Irq::Tasks as i16 => EXECUTOR_LOW.on_interrupt(),
+            n if n == uart::USART1.irq().number() as i16 => uart::USART1.on_interrupt(),
             n => panic!("unexpected interrupt {n}"),
         }
     }
@@ -177,6 +182,11 @@ async fn fault_checker(case: &'static EmuCase, t0: Instant, injection: Injection
 async fn checker(case: &'static EmuCase, t0: Instant, expect: Expect) {
     let period = Duration::from_micros(u64::from(case.sample_period_us));
     Timer::at(t0 + period * (case.samples - 1) + SETTLE).await;
+    exit(check_frames(case, &expect))
+}
+
+/// Check everything the firmware did during the replay of `case`.
+fn check_frames(case: &EmuCase, expect: &Expect) -> bool {
     println!(
         "emulated board: {} samples of {} replayed; the firmware logged {} defmt records",
         case.samples,
@@ -184,8 +194,8 @@ async fn checker(case: &'static EmuCase, t0: Instant, expect: Expect) {
         logger::records()
     );
     let (passed, caught) = record::with(|log| {
-        let passed = check::run(case, log, &SHARED, &expect, false).passed();
-        (passed, check::selftest::run(case, log, &SHARED, &expect))
+        let passed = check::run(case, log, &SHARED, expect, false).passed();
+        (passed, check::selftest::run(case, log, &SHARED, expect))
     });
     if passed && caught {
         println!(
@@ -193,7 +203,7 @@ async fn checker(case: &'static EmuCase, t0: Instant, expect: Expect) {
             case.name
         );
     }
-    exit(passed && caught)
+    passed && caught
 }
 
 /// The command frames the CAN receiver plays, around the sample `ack`
@@ -249,6 +259,9 @@ fn check_time_base() -> bool {
     ok
 }
 
+#[allow(unused_imports)] // used by the link tests only
+pub use linked::{run as linked_run, Link};
+
 /// Replay `case` through the firmware's tasks and check what they do.
 #[allow(dead_code)] // each test binary calls one of these
 pub fn run(case: &'static EmuCase) -> ! {
@@ -277,6 +290,34 @@ pub fn run_with_vrefint(case: &'static EmuCase, code: u16) -> ! {
 }
 
 fn run_with(case: &'static EmuCase, injection: Option<Injection>, node: Node) -> ! {
+    let mut nvic = power_on(case);
+    let mut params = golden_params(case.sample_period_s, case.warm_up_s);
+    params.can.node = node.number().into();
+    let boot = BootInfo {
+        reset_cause: RESET_CAUSE,
+        identity: identity(&params),
+        version: firmware::version::FRAME,
+    };
+    let pipeline = pipeline(&params);
+    let (high, low) = start_executors(&mut nvic);
+    let source = ReplayAdc::start(case);
+    start_tasks(
+        case,
+        injection,
+        node,
+        boot,
+        pipeline,
+        source,
+        high,
+        low,
+        Checker::Frames,
+    );
+    idle()
+}
+
+/// Bring the emulated board up: the instruction counter, the time driver
+/// (checked against QEMU's clock). Returns the interrupt controller.
+fn power_on(case: &EmuCase) -> NVIC {
     assert!(
         case.sample_period_us == app::SAMPLE_PERIOD_US && case.scans as usize == SCANS_PER_SAMPLE,
         "{}: codes generated for another sample period or scan count",
@@ -289,21 +330,71 @@ fn run_with(case: &'static EmuCase, injection: Option<Injection>, node: Node) ->
     if !check_time_base() {
         exit(false);
     }
+    core.NVIC
+}
 
-    let mut params = golden_params(case.sample_period_s, case.warm_up_s);
-    params.can.node = node.number().into();
-    let boot = BootInfo {
-        reset_cause: RESET_CAUSE,
-        identity: identity(&params),
-        version: firmware::version::FRAME,
-    };
-    let pipeline = match app::estimator::pipeline::<InstructionCounter>(&params, FRONTEND) {
+/// The estimator's pipeline for `params`, in a static.
+#[inline(never)] // the pipeline passes through this frame, gone before the tasks run
+fn pipeline(params: &monitor::Params) -> &'static mut Estimator<f32> {
+    match app::estimator::pipeline::<InstructionCounter>(params, FRONTEND) {
         Ok(e) => cortex_m::singleton!(: Estimator<f32> = e).expect("one estimator"),
         Err(e) => panic!("invalid golden parameters: {}", e.field),
-    };
-    let source = ReplayAdc::start(case);
+    }
+}
+
+/// Start both executors (the estimator's above the other tasks').
+fn start_executors(nvic: &mut NVIC) -> (SendSpawner, SendSpawner) {
+    // SAFETY: set before the executors start, as they require.
+    unsafe {
+        nvic.set_priority(Irq::Estimator, ESTIMATOR_PRIORITY);
+        nvic.set_priority(Irq::Tasks, TASKS_PRIORITY);
+    }
+    (
+        EXECUTOR_HIGH.start(Irq::Estimator),
+        EXECUTOR_LOW.start(Irq::Tasks),
+    )
+}
+
+/// Sleep between interrupts for ever.
+fn idle() -> ! {
+    loop {
+        cortex_m::asm::wfi();
+    }
+}
+
+/// Which checker ends the run.
+#[derive(Clone, Copy, Debug)]
+#[allow(dead_code)] // each test binary uses one
+enum Checker {
+    /// Every frame against the host's reference ([`checker`] or, with an
+    /// injection, [`fault_checker`]).
+    Frames,
+    /// As `Frames`, then the commissioning link's stream
+    /// ([`linked::stream_checker`]).
+    Stream,
+    /// The identity on CAN after an upload ([`linked::upload_checker`]).
+    Upload,
+}
+
+/// The ADC is running (`source` replays `case` from its t0): spawn the
+/// application's tasks and the checker.
+#[allow(clippy::too_many_arguments)]
+fn start_tasks(
+    case: &'static EmuCase,
+    injection: Option<Injection>,
+    node: Node,
+    boot: BootInfo,
+    pipeline: &'static mut Estimator<f32>,
+    source: ReplayAdc,
+    high: SendSpawner,
+    low: SendSpawner,
+    checker_kind: Checker,
+) {
     let t0 = record::with(|l| l.t0).expect("t0 set by the ADC");
-    let (script, rejected_commands) = commands(case, t0, node);
+    let (script, rejected_commands) = match checker_kind {
+        Checker::Upload => (Vec::new(), 0),
+        Checker::Frames | Checker::Stream => commands(case, t0, node),
+    };
     let script: &'static Vec<(Instant, CanFrame), 3> =
         cortex_m::singleton!(: Vec<(Instant, CanFrame), 3> = script).expect("one script");
     let expect = Expect {
@@ -312,17 +403,9 @@ fn run_with(case: &'static EmuCase, injection: Option<Injection>, node: Node) ->
         identity: boot.identity,
         version: boot.version,
     };
-
-    // SAFETY: set before the executors start, as they require.
-    unsafe {
-        core.NVIC.set_priority(Irq::Estimator, ESTIMATOR_PRIORITY);
-        core.NVIC.set_priority(Irq::Tasks, TASKS_PRIORITY);
-    }
-    let high = EXECUTOR_HIGH.start(Irq::Estimator);
     high.spawn(
         estimator(source, &RELAY, InstructionCounter, pipeline, boot).expect("estimator task"),
     );
-    let low = EXECUTOR_LOW.start(Irq::Tasks);
     // The injection: 100 ms after the host's reference first energises
     // the relay (the golden's healthy claim).
     let inject = injection.map(|i| {
@@ -354,12 +437,17 @@ fn run_with(case: &'static EmuCase, injection: Option<Injection>, node: Node) ->
     low.spawn(can_tx(RecordingCanTx, node).expect("CAN transmit task"));
     let can_rx = can_rx(ScriptedCanRx::new(script.as_slice()), node, CHALLENGE_SEED);
     low.spawn(can_rx.expect("CAN receive task"));
-    match inject {
-        None => low.spawn(checker(case, t0, expect).expect("checker task")),
-        Some((at, i)) => low.spawn(fault_checker(case, t0, i, at).expect("checker task")),
-    }
-    loop {
-        cortex_m::asm::wfi();
+    match (checker_kind, inject) {
+        (Checker::Frames, None) => low.spawn(checker(case, t0, expect).expect("checker task")),
+        (Checker::Frames, Some((at, i))) => {
+            low.spawn(fault_checker(case, t0, i, at).expect("checker task"))
+        }
+        (Checker::Stream, _) => {
+            low.spawn(linked::stream_checker(case, t0, expect).expect("checker task"))
+        }
+        (Checker::Upload, _) => {
+            low.spawn(linked::upload_checker(expect.identity).expect("checker task"))
+        }
     }
 }
 

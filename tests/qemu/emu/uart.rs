@@ -31,6 +31,8 @@
 //! ring is full the handler leaves the byte in DR and masks its interrupt;
 //! the reader unmasks it after taking bytes, so nothing is ever lost.
 //! Transmission polls the status register.
+// Each test binary uses a part of the emulated board.
+#![allow(dead_code)]
 
 use core::ptr::{read_volatile, write_volatile};
 use core::sync::atomic::{AtomicBool, Ordering};
