@@ -47,8 +47,9 @@ type Flash = RamNorFlash<PAGE>;
 /// USART1's interrupt: below the estimator (as the STM32 board's USB
 /// interrupt), above the other tasks.
 const UART_PRIORITY: u8 = 7 << 4;
-/// How long a checker waits for the host (virtual time).
-const HOST_TIMEOUT: Duration = Duration::from_secs(600);
+/// How long a checker waits for the host, virtual time (about half as
+/// long in wall time; the host's commands take a few virtual seconds).
+const HOST_TIMEOUT: Duration = Duration::from_secs(60);
 
 firmware::app_link_task! {
     shared: SHARED,
