@@ -116,6 +116,17 @@ impl CycleCounter for Dwt {
 /// The independent watchdog, started.
 pub struct Iwdg(IndependentWatchdog<'static, IWDG>);
 
+/// Set once the independent watchdog runs (`Iwdg::start`): the flash
+/// storage stretches its timeout around a sector erase only then (before
+/// it is started its prescaler is not ours to touch, and the LSI that
+/// clocks it may still be off).
+static WATCHDOG_STARTED: AtomicBool = AtomicBool::new(false);
+
+/// Is the independent watchdog running?
+pub fn watchdog_started() -> bool {
+    WATCHDOG_STARTED.load(Ordering::Acquire)
+}
+
 impl Iwdg {
     /// Start the watchdog (it cannot be stopped again). In a debug build it
     /// pauses while a debugger halts the core, so a breakpoint does not
@@ -126,6 +137,7 @@ impl Iwdg {
         }
         let mut w = IndependentWatchdog::new(iwdg, WATCHDOG_TIMEOUT_US);
         w.unleash();
+        WATCHDOG_STARTED.store(true, Ordering::Release);
         Self(w)
     }
 }
