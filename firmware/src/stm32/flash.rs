@@ -12,6 +12,9 @@
 //! partitions are used from the one link task (and at boot, before the
 //! executors run), so the mutex never contends: a `NoopRawMutex`.
 //!
+//! Before an erase the relay is de-energised: nothing runs while the
+//! core is stalled, the estimator included.
+//!
 //! The driver is blocking on purpose: the STM32F405 has a single flash
 //! bank, so while it programs or erases, every instruction fetch from
 //! flash waits anyway; an "async" erase would not let anything else run.
@@ -96,6 +99,13 @@ impl NorFlash for StorageFlash {
     /// every erase in service would reset the board.
     fn erase(&mut self, from: u32, to: u32) -> Result<(), Error> {
         Self::check(from, to)?;
+        // The estimator cannot run during the erase: the relay must not
+        // stay energised ("healthy") on a monitor that is blind for
+        // seconds. Erases come only out of service (at boot, where the
+        // relay is off anyway, or in a parameter upload, after which the
+        // monitor restarts with the relay off); the estimator drives the
+        // relay again from its next block.
+        super::relay::force_off();
         let mut sector = from;
         while sector < to {
             let _stretched = StretchedWatchdog::new();
