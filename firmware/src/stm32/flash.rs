@@ -142,6 +142,8 @@ impl StretchedWatchdog {
         if !watchdog_started() {
             // Boot, before the watchdog starts: nothing to stretch (and
             // its clock, the LSI, may still be off: PVU would never clear).
+            // With the hardware watchdog (option bytes) it runs from reset
+            // and is stretched here at boot too.
             return Self { normal: None };
         }
         let iwdg = pac::IWDG;

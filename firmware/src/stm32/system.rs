@@ -117,14 +117,17 @@ impl CycleCounter for Dwt {
 pub struct Iwdg(IndependentWatchdog<'static, IWDG>);
 
 /// Set once the independent watchdog runs (`Iwdg::start`): the flash
-/// storage stretches its timeout around a sector erase only then (before
-/// it is started its prescaler is not ours to touch, and the LSI that
-/// clocks it may still be off).
+/// storage stretches its timeout around a sector erase only while it runs
+/// (before, the LSI that clocks it may still be off: a prescaler update
+/// would never complete).
 static WATCHDOG_STARTED: AtomicBool = AtomicBool::new(false);
 
-/// Is the independent watchdog running?
+/// Is the independent watchdog running? Started by `Iwdg::start`, or from
+/// reset when the option bytes select the hardware watchdog (WDG_SW
+/// clear; this firmware does not set it, a programmer might): then it
+/// runs at boot already, with its reset timeout (/4, 0xFFF: 350–960 ms).
 pub fn watchdog_started() -> bool {
-    WATCHDOG_STARTED.load(Ordering::Acquire)
+    WATCHDOG_STARTED.load(Ordering::Acquire) || !pac::FLASH.optcr().read().wdg_sw()
 }
 
 impl Iwdg {
