@@ -12,8 +12,9 @@
 //! partitions are used from the one link task (and at boot, before the
 //! executors run), so the mutex never contends: a `NoopRawMutex`.
 //!
-//! Before an erase the relay is de-energised: nothing runs while the
-//! core is stalled, the estimator included.
+//! Before an erase the relay is de-energised (nothing runs while the
+//! core is stalled, the estimator included) and embassy's clock is
+//! stopped (see `PausedClock`).
 //!
 //! The driver is blocking on purpose: the STM32F405 has a single flash
 //! bank, so while it programs or erases, every instruction fetch from
@@ -106,6 +107,7 @@ impl NorFlash for StorageFlash {
         // monitor restarts with the relay off); the estimator drives the
         // relay again from its next block.
         super::relay::force_off();
+        let _clock = PausedClock::new();
         let mut sector = from;
         while sector < to {
             let _stretched = StretchedWatchdog::new();
@@ -113,6 +115,35 @@ impl NorFlash for StorageFlash {
             sector += SECTOR_SIZE;
         }
         Ok(())
+    }
+}
+
+/// embassy's clock (the time driver, TIM2) stopped while this lives.
+///
+/// Nothing runs while the core is stalled; if the clock ran on, every
+/// periodic task would find itself 1–2 s late afterwards. embassy's
+/// `Ticker` catches up, so the supervisor would run some hundred checks
+/// back to back, far faster than the estimator's 1 ms blocks, see the
+/// sample count stand still for two checks in a row and take the
+/// estimator for stalled: relay off for good, a stall alarm on CAN and a
+/// watchdog reset. With the clock stopped the tasks resume where they
+/// were; the estimator counts the samples the erase cost (an ADC
+/// overrun), and embassy time (the event memory's uptime stamps) lags
+/// the real time by the erase. The time driver itself stops TIM2 the
+/// same way in its low-power mode; its interrupt handler never touches
+/// CR1.
+struct PausedClock;
+
+impl PausedClock {
+    fn new() -> Self {
+        cortex_m::interrupt::free(|_| pac::TIM2.cr1().modify(|w| w.set_cen(false)));
+        Self
+    }
+}
+
+impl Drop for PausedClock {
+    fn drop(&mut self) {
+        cortex_m::interrupt::free(|_| pac::TIM2.cr1().modify(|w| w.set_cen(true)));
     }
 }
 
