@@ -3,6 +3,9 @@
 //! - Link scripts: `memory.x` (workspace root) is copied to OUT_DIR so
 //!   editing it relinks, and defmt's script is added. `link.x` comes from
 //!   `.cargo/config.toml` (see `../shared/notes/embedded-toolchain-facts.md`).
+//!   `image.x` limits the image to flash sectors 0–5: the link's
+//!   parameter and event storage is above (`memory.x` keeps the whole
+//!   flash for the QEMU test images, which are larger).
 //! - Installation parameters: if `LEAK_MONITOR_PARAMS` names a TOML file
 //!   (e.g. written by `host-sim calibrate`; relative paths are taken from
 //!   the workspace root), it is validated with the monitor's own rules and
@@ -23,6 +26,11 @@ fn main() {
     println!("cargo:rustc-link-search={}", out.display());
     println!("cargo:rerun-if-changed=../memory.x");
     println!("cargo:rustc-link-arg-bins=-Tdefmt.x");
+    // The image's room in flash (sectors 0–5; the link's storage above).
+    let here = PathBuf::from(std::env::var("CARGO_MANIFEST_DIR").unwrap());
+    std::fs::copy(here.join("image.x"), out.join("image.x")).unwrap();
+    println!("cargo:rerun-if-changed=image.x");
+    println!("cargo:rustc-link-arg-bins=-Timage.x");
 
     println!("cargo:rerun-if-env-changed=LEAK_MONITOR_PARAMS");
     let (params, mut code) = match std::env::var_os("LEAK_MONITOR_PARAMS").filter(|v| !v.is_empty())

@@ -194,15 +194,16 @@ print(f'Measured by `scripts/docs-figures.sh size` at commit `{sys.argv[2]}` (ru
 print()
 print('| | used | budget |')
 print('|---|---|---|')
-print(f'| flash (vector table, code, constants, `.data` image) | {b(flash)} | 128 KiB |')
+print(f'| flash (vector table, code, constants, `.data` image) | {b(flash)} | 256 KiB |')
 print(f'| static RAM (`.data`, `.bss`, RTT buffer) | {b(ram)} | |')
 print(f'| stack, worst case (estimate) | {b(stack)} | |')
 print(f'| RAM in all | {b(ram + stack)} | 48 KiB |')
 print()
 n = lambda label: f'{part(label):,} B'.replace(',', ' ')
-print(f'Stack estimate by part: thread mode {n("thread mode")}, the estimator\'s interrupt '
+usb = f'the USB interrupt preempting it {n("USB interrupt")}, ' if re.search(r'^USB interrupt', text, re.M) else ''
+print(f'Stack estimate by part: thread mode {n("thread mode")}, {usb}the estimator\'s interrupt '
       f'executor preempting it {n("estimator (UART4)")}, one interrupt handler '
-      f'{n("HAL interrupt")}, two exception frames {n("exception frames")} '
+      f'{n("HAL interrupt")}, exception frames {n("exception frames")} '
       f'(`python3 scripts/stack_estimate.py target/thumbv7em-none-eabihf/release/firmware` '
       f'prints the deepest chains).')
 PY

@@ -10,10 +10,11 @@ possible target) and otherwise reported; they are bounded by adding the
 largest frame chain of any function reachable that way (see below).
 
 Worst case = deepest thread-mode path (reset -> main -> thread executor
--> task) + the estimator's interrupt executor (UART4) preempting it + one
-HAL interrupt preempting that (DMA, CAN, timer: one priority level, they
-do not nest) + one exception frame with floating-point state (104 bytes)
-per preemption.
+-> task) + the USB interrupt (OTG_FS, priority 7: above thread mode, below
+the estimator) preempting it + the estimator's interrupt executor (UART4,
+priority 6) preempting that + one HAL interrupt preempting that (DMA, CAN,
+timer: one priority level, they do not nest) + one exception frame with
+floating-point state (104 bytes) per preemption.
 
 usage: stack_estimate.py ELF  (needs arm-none-eabi-objdump or llvm-objdump)
 """
@@ -162,10 +163,16 @@ def main():
     estimator = root(lambda n: n == "UART4")
     hal_irqs = [a for a in funcs if re.fullmatch(r"(DMA2_STREAM0|CAN1_TX|CAN1_RX0|CAN1_RX1|CAN1_SCE|TIM2)", name(a))]
     hal = max((depth(n) for n in hal_irqs), default=(0, ()))
-    total = thread[0] + estimator[0] + hal[0] + 2 * EXC_FRAME_FP
-    for label, d in [("thread mode", thread), ("estimator (UART4)", estimator), ("HAL interrupt", hal)]:
+    usb = root(lambda n: n == "OTG_FS")
+    preemptions = 2 + (1 if usb[1] else 0)
+    total = thread[0] + usb[0] + estimator[0] + hal[0] + preemptions * EXC_FRAME_FP
+    parts = [("thread mode", thread)]
+    if usb[1]:
+        parts.append(("USB interrupt", usb))
+    parts += [("estimator (UART4)", estimator), ("HAL interrupt", hal)]
+    for label, d in parts:
         print(f"{label:<18} {d[0]:>6} B  via {' > '.join(x[:70] for x in d[1][:9])}")
-    print(f"exception frames   {2 * EXC_FRAME_FP:>6} B")
+    print(f"exception frames   {preemptions * EXC_FRAME_FP:>6} B")
     print(f"worst case         {total:>6} B")
     if unresolved:
         print("indirect calls not followed in: " + ", ".join(sorted(u[:60] for u in unresolved)[:8]))

@@ -60,8 +60,15 @@ echo "$stack_report"
 stack=$(sed -n 's/^STACK_ESTIMATE=//p' <<<"$stack_report")
 echo "firmware: flash ${flash} B, static RAM ${ram} B, stack estimate ${stack} B"
 [ "$flash" -gt 16384 ] || { echo "firmware image suspiciously small"; exit 1; }
-# Budget (README): flash <= 128 KiB, RAM incl. stacks <= 48 KiB.
-[ "$flash" -le $((128 * 1024)) ] || { echo "flash ${flash} B over the 128 KiB budget"; exit 1; }
+# Budget (docs/firmware.md): flash <= 256 KiB, RAM incl. stacks <= 48 KiB.
+# Flash: the image's room is sectors 0-5 of the 1 MiB STM32F405RG
+# (0x08000000-0x0803FFFF, 256 KiB; firmware/image.x fails the link beyond);
+# sectors 6-9 hold the commissioning link's parameters and events. Measured
+# when USB CDC-ACM and the link were wired on the board (rustc 1.95.0):
+# 219 516 B, from 131 988 B without them (embassy-usb, sequential-storage,
+# postcard and the link's device end: ~85 KiB); over 192 KiB, so the budget
+# is the whole image region.
+[ "$flash" -le $((256 * 1024)) ] || { echo "flash ${flash} B over the 256 KiB budget"; exit 1; }
 [ $((ram + stack)) -le $((48 * 1024)) ] || { echo "RAM $((ram + stack)) B over the 48 KiB budget"; exit 1; }
 # (The application tasks without the STM32 board are built, and run, by
 # the QEMU tests below: they depend on firmware without default features.)

@@ -15,7 +15,8 @@
 //! | relay read-back | PB13 | | the relay's auxiliary NO contact to GND, 10 kΩ pull-up to 3.3 V: low = energised |
 //! | status LED | PC12 | | high = on (Olimex STM32-H405 STAT LED) |
 //! | CAN1 RX / TX | PB8 / PB9 | | 3.3 V transceiver (e.g. TJA1051T/3, SN65HVD230), 500 kbit/s |
-//! | HSE | PH0 / PH1 | | 8 MHz crystal → 168 MHz |
+//! | USB OTG FS DM / DP | PA11 / PA12 | | commissioning link (USB CDC-ACM, Olimex STM32-H405 mini-USB socket); no VBUS sensing |
+//! | HSE | PH0 / PH1 | | 8 MHz crystal → 168 MHz, PLL Q → 48 MHz for USB |
 //! | SWD | PA13 / PA14 | | probe (flashing, RTT log) |
 //!
 //! Each analogue input has a 1 kΩ series resistor, 10 nF to ground at the
@@ -47,6 +48,40 @@ pub const ADC_SAMPLE_CYCLES: u16 = 144;
 /// Is the optional oil-temperature transmitter fitted? If not, PC2 is
 /// not read and the monitor runs without temperature compensation.
 pub const TEMP_OIL_FITTED: bool = false;
+
+/// Flash layout of the STM32F405RG (1 MiB, one bank: sectors 0–3 of
+/// 16 KiB, sector 4 of 64 KiB, sectors 5–11 of 128 KiB). Offsets are from
+/// the flash base 0x0800_0000 (as the flash driver counts them):
+///
+/// | sectors | addresses | use |
+/// |---|---|---|
+/// | 0–5 | 0x0800_0000–0x0803_FFFF | program image, 256 KiB (`firmware/image.x` fails the link beyond) |
+/// | 6–7 | 0x0804_0000–0x0807_FFFF | parameter sets and boot counter (`link::Storage` map) |
+/// | 8–9 | 0x0808_0000–0x080B_FFFF | event memory (`link::Storage` queue) |
+/// | 10–11 | 0x080C_0000–0x080F_FFFF | free |
+///
+/// An erase of a 128 KiB sector stalls the core for 1–2 s (single bank):
+/// the link erases only out of service (`link::storage::Erase`).
+pub mod flash_layout {
+    /// Flash base address.
+    pub const BASE: u32 = 0x0800_0000;
+    /// The program image's room (sectors 0–5; `firmware/image.x`).
+    pub const IMAGE_SIZE: u32 = 256 * 1024;
+    /// Size of the sectors the storage uses (5–11).
+    pub const SECTOR_SIZE: u32 = 128 * 1024;
+    /// Parameter storage (sectors 6–7): offset from [`BASE`].
+    pub const PARAMS_OFFSET: u32 = 0x4_0000;
+    /// Parameter storage size.
+    pub const PARAMS_SIZE: u32 = 2 * SECTOR_SIZE;
+    /// Event memory (sectors 8–9): offset from [`BASE`].
+    pub const EVENTS_OFFSET: u32 = 0x8_0000;
+    /// Event memory size.
+    pub const EVENTS_SIZE: u32 = 2 * SECTOR_SIZE;
+
+    const _: () = assert!(PARAMS_OFFSET == IMAGE_SIZE);
+    const _: () = assert!(EVENTS_OFFSET == PARAMS_OFFSET + PARAMS_SIZE);
+    const _: () = assert!(EVENTS_OFFSET + EVENTS_SIZE <= 1024 * 1024);
+}
 
 /// GPIO port of the relay driver (0 = A, 1 = B, …), for the fault handler.
 pub const RELAY_PORT: u8 = 1;

@@ -1,21 +1,26 @@
 //! Leak monitor firmware for the STM32F405RG (168 MHz Cortex-M4F).
 //!
 //! Two executors: the estimator runs in an interrupt executor at a higher
-//! priority than everything else the application does, so CAN, logging
-//! and the supervisor can never delay it; CAN, the supervisor and the log
-//! run in the thread-mode executor. See `firmware/src/lib.rs` for the
+//! priority than everything else the application does, so CAN, logging,
+//! the supervisor and the commissioning link can never delay it; CAN, the
+//! supervisor, the log, the commissioning link (USB CDC-ACM) and the USB
+//! device run in the thread-mode executor. See `firmware/src/lib.rs` for the
 //! tasks and the `boards` crate (`boards/src/h405.rs`) for the wiring.
 #![no_std]
 #![no_main]
 
 mod stm32;
 
+use core::future::Future;
+use core::pin::pin;
+use core::task::{Context, Poll, Waker};
+
 use defmt::unwrap;
 use defmt_rtt as _;
 use embassy_executor::{Executor, InterruptExecutor, Spawner};
 use embassy_stm32::interrupt;
 use embassy_stm32::interrupt::{InterruptExt, Priority};
-use embassy_stm32::peripherals::{CAN1, PB8, PB9};
+use embassy_stm32::peripherals::{CAN1, FLASH, PB8, PB9};
 use embassy_stm32::Peri;
 use firmware::app;
 use firmware::app::shared::Shared;
@@ -24,15 +29,18 @@ use firmware::board_map::FRONTEND;
 use monitor::device::diagnostics::brownout;
 use monitor::device::diagnostics::{DeviceFault, DeviceFaults};
 use monitor::device::Estimator;
-use monitor::protocol::IdentityFrame;
+use monitor::params::{ParamError, Params};
+use monitor::protocol::{IdentityFrame, Node, ResetCause};
 use static_cell::StaticCell;
 use stm32::adc::AdcSampler;
 use stm32::can::{Receiver, Transmitter};
 use stm32::diagnostics::BoardSelfTest;
+use stm32::flash::StoragePartition;
 use stm32::lsi::LsiMeter;
 use stm32::pins::{self, Board};
 use stm32::relay::Relay;
 use stm32::system::{Dwt, Iwdg, Led};
+use stm32::usb::UsbSerial;
 
 /// The installation's parameters, compiled in by `build.rs` from the TOML
 /// file named by `LEAK_MONITOR_PARAMS` (or the reference rig's).
@@ -47,6 +55,9 @@ static RELAY: StaticCell<Relay> = StaticCell::new();
 static ESTIMATOR: StaticCell<Estimator<f32>> = StaticCell::new();
 static EXECUTOR_HIGH: InterruptExecutor = InterruptExecutor::new();
 static EXECUTOR_LOW: StaticCell<Executor> = StaticCell::new();
+/// The commissioning link's device end on the board's flash.
+type LinkDevice = link::Device<StoragePartition, StoragePartition>;
+static DEVICE: StaticCell<LinkDevice> = StaticCell::new();
 
 /// Priority of the estimator's executor: above the thread-mode tasks,
 /// below the DMA and CAN interrupt handlers (priority 0), which are short.
@@ -70,6 +81,13 @@ firmware::app_tasks! {
     can_rx: Receiver,
 }
 
+firmware::app_link_task! {
+    shared: SHARED,
+    serial: UsbSerial,
+    params_flash: StoragePartition,
+    events_flash: StoragePartition,
+}
+
 /// Bring CAN up (waits for an idle bus) without holding anything else up.
 #[embassy_executor::task]
 async fn can_start(
@@ -77,9 +95,9 @@ async fn can_start(
     can: Peri<'static, CAN1>,
     rx: Peri<'static, PB8>,
     tx: Peri<'static, PB9>,
+    node: Node,
     seed: u64,
 ) {
-    let node = installation::INSTALLATION.node();
     let (tx, rx) = stm32::can::start(can, rx, tx, node).await;
     defmt::info!(
         "CAN: on the bus at {} bit/s as node {}",
@@ -88,6 +106,103 @@ async fn can_start(
     );
     spawner.spawn(unwrap!(can_tx(tx, node)));
     spawner.spawn(unwrap!(can_rx(rx, node, seed)));
+}
+
+/// The reset cause as the event memory records it (it has no
+/// low-power-reset kind; both watchdogs are one kind there).
+fn link_reset_cause(cause: ResetCause) -> link::ResetCause {
+    match cause {
+        ResetCause::PowerOn => link::ResetCause::PowerOn,
+        ResetCause::Pin => link::ResetCause::Pin,
+        ResetCause::Watchdog | ResetCause::WindowWatchdog => link::ResetCause::Watchdog,
+        ResetCause::Software => link::ResetCause::Software,
+        ResetCause::BrownOut => link::ResetCause::BrownOut,
+        ResetCause::LowPower | ResetCause::Unknown => link::ResetCause::Unknown,
+    }
+}
+
+/// The commissioning link's device end, started (see `start`), in its
+/// static. Not inlined: the start's future and the device are kilobytes,
+/// and this frame is gone before the tasks run.
+#[inline(never)]
+fn start_link(
+    flash: Peri<'static, FLASH>,
+    serial: &str,
+    reset_cause: ResetCause,
+) -> &'static mut LinkDevice {
+    let (params_flash, events_flash) = stm32::flash::partitions(flash);
+    let mut info_serial = heapless::String::new();
+    // 24 hex digits, the String's capacity.
+    let _ = info_serial.push_str(serial);
+    let info = link::DeviceInfo {
+        firmware: env!("CARGO_PKG_VERSION"),
+        serial: info_serial,
+        period_us: firmware::board_map::SAMPLE_PERIOD_US,
+    };
+    // Polled here to its end: it never waits for anything but the
+    // blocking flash, so no waker is needed. The future (8.5 KiB) and the
+    // device (7.7 KiB) are this frame's bulk; polled in place (not through
+    // `block_on` and `StaticCell::init`), which saves a copy of each.
+    let slot = DEVICE.uninit();
+    let mut start = pin!(link::Device::start(
+        link::Storage::new(
+            params_flash,
+            0..firmware::board_map::flash_layout::PARAMS_SIZE,
+            events_flash,
+            0..firmware::board_map::flash_layout::EVENTS_SIZE,
+        ),
+        info,
+        &installation::INSTALLATION,
+        link_reset_cause(reset_cause),
+    ));
+    let mut cx = Context::from_waker(Waker::noop());
+    loop {
+        if let Poll::Ready(device) = start.as_mut().poll(&mut cx) {
+            return slot.write(device);
+        }
+    }
+}
+
+/// The estimator's pipeline on `params`, in its static (once).
+#[inline(never)]
+fn init_pipeline(params: &Params) -> Result<&'static mut Estimator<f32>, ParamError> {
+    app::estimator::pipeline::<Dwt>(params, FRONTEND).map(|e| &mut *ESTIMATOR.init(e))
+}
+
+/// The estimator's pipeline on the active set `active`, in its static,
+/// and the identity it runs under. Not inlined: the pipeline is built on
+/// the stack before it is moved into its static.
+#[inline(never)]
+fn build_pipeline(
+    active: &link::Loaded,
+    node: Node,
+) -> (&'static mut Estimator<f32>, IdentityFrame) {
+    match init_pipeline(&active.params) {
+        Ok(e) => (e, app::link::identity_frame(node, active)),
+        // A stored set was validated when it was uploaded and again when
+        // it was read: this is a last line of defence. Run on the
+        // compiled-in set rather than reset for ever; the link stays up,
+        // so a good set can be uploaded.
+        Err(e) if active.stored => {
+            defmt::error!(
+                "stored parameters refused by the estimator ({}): running on the compiled-in set",
+                e.field
+            );
+            match init_pipeline(&installation::INSTALLATION) {
+                Ok(e) => (
+                    e,
+                    IdentityFrame {
+                        node,
+                        params_crc: installation::INSTALLATION_CRC,
+                        params_version: 0,
+                    },
+                ),
+                Err(e) => defmt::panic!("invalid built-in parameters: {}", e.field),
+            }
+        }
+        // Validated at build time (build.rs); kept as a last line of defence.
+        Err(e) => defmt::panic!("invalid built-in parameters: {}", e.field),
+    }
 }
 
 #[cortex_m_rt::entry]
@@ -101,15 +216,7 @@ fn main() -> ! {
 /// Bring the board up and spawn the tasks.
 #[inline(never)]
 fn start(spawner: Spawner) {
-    let boot = BootInfo {
-        reset_cause: stm32::system::take_reset_cause(),
-        identity: IdentityFrame {
-            node: installation::INSTALLATION.node(),
-            params_crc: installation::INSTALLATION_CRC,
-            params_version: 0,
-        },
-        version: firmware::version::FRAME,
-    };
+    let reset_cause = stm32::system::take_reset_cause();
     let p = embassy_stm32::init(stm32::clocks::config());
     let Board {
         adc,
@@ -125,13 +232,17 @@ fn start(spawner: Spawner) {
         iwdg,
         rng,
         lsi_timer,
+        usb,
+        usb_dm,
+        usb_dp,
+        flash,
     } = pins::split(p);
     // First of all: the relay output, de-energised.
     let relay: &'static Relay = RELAY.init(Relay::new(relay, relay_readback));
     defmt::info!(
         "leak monitor {} on STM32F405, last reset: {}",
         env!("CARGO_PKG_VERSION"),
-        boot.reset_cause
+        reset_cause
     );
     let mut device_faults = DeviceFaults::NONE;
     stm32::system::enable_clock_security();
@@ -147,15 +258,37 @@ fn start(spawner: Spawner) {
             SHARED.raise_device_fault(f);
         }
     }
-    defmt::info!(
-        "installation parameters: {} (identity {=u32:#010x}, version 0)",
-        installation::INSTALLATION_SOURCE,
-        installation::INSTALLATION_CRC
-    );
-    let pipeline = match app::estimator::pipeline::<Dwt>(&installation::INSTALLATION, FRONTEND) {
-        Ok(e) => ESTIMATOR.init(e),
-        // Validated at build time (build.rs); kept as a last line of defence.
-        Err(e) => defmt::panic!("invalid built-in parameters: {}", e.field),
+    // The commissioning link's device end: the active parameter set (the
+    // stored one, else the compiled-in default), this boot's number and
+    // its reset record in the event memory. It may erase a flash sector
+    // (1–2 s, the core stalled): at boot that is out of service (relay
+    // off, nothing sampled yet) and before the watchdog starts.
+    let serial = embassy_stm32::uid::uid_hex();
+    let device = start_link(flash, serial, reset_cause);
+    let active = device.params();
+    // CAN runs on the active set's node (a new node number in an upload
+    // takes effect at the next reset).
+    let node = active.params.node();
+    if active.stored {
+        defmt::info!(
+            "parameters: stored set (identity {=u32:#010x}, version {=u32}), boot {=u32}",
+            active.id.crc,
+            active.id.version,
+            device.boot()
+        );
+    } else {
+        defmt::info!(
+            "parameters: compiled in, {} (identity {=u32:#010x}, version 0), boot {=u32}",
+            installation::INSTALLATION_SOURCE,
+            active.id.crc,
+            device.boot()
+        );
+    }
+    let (pipeline, identity) = build_pipeline(active, node);
+    let boot = BootInfo {
+        reset_cause,
+        identity,
+        version: firmware::version::FRAME,
     };
     let core = unwrap!(cortex_m::Peripherals::take());
     let cycles = Dwt::new(core.DCB, core.DWT);
@@ -177,5 +310,10 @@ fn start(spawner: Spawner) {
         Led::new(led),
         self_test
     )));
-    spawner.spawn(unwrap!(can_start(spawner, can, can_rx, can_tx, seed)));
+    spawner.spawn(unwrap!(can_start(spawner, can, can_rx, can_tx, node, seed)));
+
+    let (usb_device, port) = stm32::usb::start(usb, usb_dm, usb_dp, serial);
+    spawner.spawn(unwrap!(stm32::usb::device(usb_device)));
+    spawner.spawn(unwrap!(link(port, device, node)));
+    defmt::info!("commissioning link: USB CDC-ACM, serial number {}", serial);
 }

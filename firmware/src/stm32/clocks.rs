@@ -2,8 +2,8 @@
 //! TIM3 at 84 MHz), APB2 84 MHz (ADC clock 21 MHz), 48 MHz for USB.
 
 use embassy_stm32::rcc::{
-    AHBPrescaler, APBPrescaler, Hse, HseMode, Pll, PllMul, PllPDiv, PllPreDiv, PllQDiv, PllSource,
-    Sysclk,
+    mux, AHBPrescaler, APBPrescaler, Hse, HseMode, Pll, PllMul, PllPDiv, PllPreDiv, PllQDiv,
+    PllSource, Sysclk,
 };
 use embassy_stm32::time::Hertz;
 use embassy_stm32::Config;
@@ -22,7 +22,10 @@ pub fn config() -> Config {
     c.rcc.pll = Some(Pll {
         prediv: PllPreDiv::DIV4,
         mul: PllMul::MUL168,
+        // 8 MHz / 4 × 168 = 336 MHz VCO; P: / 2 = 168 MHz core.
         divp: Some(PllPDiv::DIV2),
+        // Q: 336 MHz / 7 = 48 MHz exactly, the USB OTG FS clock (the
+        // driver checks it is within 0.25 %).
         divq: Some(PllQDiv::DIV7),
         divr: None,
     });
@@ -30,5 +33,7 @@ pub fn config() -> Config {
     c.rcc.ahb_pre = AHBPrescaler::DIV1;
     c.rcc.apb1_pre = APBPrescaler::DIV4;
     c.rcc.apb2_pre = APBPrescaler::DIV2;
+    // The 48 MHz domain (USB OTG FS) from PLL Q.
+    c.rcc.mux.clk48sel = mux::Clk48sel::PLL1_Q;
     c
 }

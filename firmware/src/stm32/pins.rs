@@ -3,7 +3,8 @@
 
 use embassy_stm32::adc::{AdcChannel, AnyAdcChannel, SampleTime};
 use embassy_stm32::peripherals::{
-    ADC1, CAN1, DMA2_CH0, IWDG, PB12, PB13, PB8, PB9, PC12, RNG, TIM3, TIM5,
+    ADC1, CAN1, DMA2_CH0, FLASH, IWDG, PA11, PA12, PB12, PB13, PB8, PB9, PC12, RNG, TIM3, TIM5,
+    USB_OTG_FS,
 };
 use embassy_stm32::{Peri, Peripherals};
 use monitor::signal::frontend::CHANNELS;
@@ -41,6 +42,14 @@ pub struct Board {
     /// TIM5, capturing the LSI on channel 4 (internal, no pin) for the
     /// clock cross-check.
     pub lsi_timer: Peri<'static, TIM5>,
+    /// USB OTG FS (the commissioning link, CDC-ACM).
+    pub usb: Peri<'static, USB_OTG_FS>,
+    /// USB OTG FS DM.
+    pub usb_dm: Peri<'static, PA11>,
+    /// USB OTG FS DP.
+    pub usb_dp: Peri<'static, PA12>,
+    /// The flash controller (the link's parameter and event storage).
+    pub flash: Peri<'static, FLASH>,
 }
 
 /// Assign the pins.
@@ -67,5 +76,9 @@ pub fn split(p: Peripherals) -> Board {
         iwdg: p.IWDG,
         rng: p.RNG,
         lsi_timer: p.TIM5,
+        usb: p.USB_OTG_FS,
+        usb_dm: p.PA11,
+        usb_dp: p.PA12,
+        flash: p.FLASH,
     }
 }

@@ -116,6 +116,20 @@ impl CycleCounter for Dwt {
 /// The independent watchdog, started.
 pub struct Iwdg(IndependentWatchdog<'static, IWDG>);
 
+/// Set once the independent watchdog runs (`Iwdg::start`): the flash
+/// storage stretches its timeout around a sector erase only while it runs
+/// (before, the LSI that clocks it may still be off: a prescaler update
+/// would never complete).
+static WATCHDOG_STARTED: AtomicBool = AtomicBool::new(false);
+
+/// Is the independent watchdog running? Started by `Iwdg::start`, or from
+/// reset when the option bytes select the hardware watchdog (WDG_SW
+/// clear; this firmware does not set it, a programmer might): then it
+/// runs at boot already, with its reset timeout (/4, 0xFFF: 350–960 ms).
+pub fn watchdog_started() -> bool {
+    WATCHDOG_STARTED.load(Ordering::Acquire) || !pac::FLASH.optcr().read().wdg_sw()
+}
+
 impl Iwdg {
     /// Start the watchdog (it cannot be stopped again). In a debug build it
     /// pauses while a debugger halts the core, so a breakpoint does not
@@ -126,6 +140,7 @@ impl Iwdg {
         }
         let mut w = IndependentWatchdog::new(iwdg, WATCHDOG_TIMEOUT_US);
         w.unleash();
+        WATCHDOG_STARTED.store(true, Ordering::Release);
         Self(w)
     }
 }
