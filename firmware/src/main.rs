@@ -13,7 +13,7 @@ mod stm32;
 
 use core::future::Future;
 use core::pin::pin;
-use core::task::{Context, Poll, Waker};
+use core::task::{Context, Waker};
 
 use defmt::unwrap;
 use defmt_rtt as _;
@@ -139,28 +139,28 @@ fn start_link(
         serial: info_serial,
         period_us: firmware::board_map::SAMPLE_PERIOD_US,
     };
+    // Built in its static, then booted in place: the device (7.7 KiB)
+    // passes through no other frame, and the boot future only borrows it.
+    let device = DEVICE.init_with(|| {
+        link::Device::new(
+            link::Storage::new(
+                params_flash,
+                0..firmware::board_map::flash_layout::PARAMS_SIZE,
+                events_flash,
+                0..firmware::board_map::flash_layout::EVENTS_SIZE,
+            ),
+            info,
+            &installation::INSTALLATION,
+        )
+    });
     // Polled here to its end: it never waits for anything but the
-    // blocking flash, so no waker is needed. The future (8.5 KiB) and the
-    // device (7.7 KiB) are this frame's bulk; polled in place (not through
-    // `block_on` and `StaticCell::init`), which saves a copy of each.
-    let slot = DEVICE.uninit();
-    let mut start = pin!(link::Device::start(
-        link::Storage::new(
-            params_flash,
-            0..firmware::board_map::flash_layout::PARAMS_SIZE,
-            events_flash,
-            0..firmware::board_map::flash_layout::EVENTS_SIZE,
-        ),
-        info,
-        &installation::INSTALLATION,
-        link_reset_cause(reset_cause),
-    ));
-    let mut cx = Context::from_waker(Waker::noop());
-    loop {
-        if let Poll::Ready(device) = start.as_mut().poll(&mut cx) {
-            return slot.write(device);
-        }
+    // blocking flash, so no waker is needed.
+    {
+        let mut boot = pin!(device.boot_up(link_reset_cause(reset_cause)));
+        let mut cx = Context::from_waker(Waker::noop());
+        while boot.as_mut().poll(&mut cx).is_pending() {}
     }
+    device
 }
 
 /// The estimator's pipeline on `params`, in its static (once).

@@ -60,28 +60,35 @@ impl<P: NorFlash, E: NorFlash> Device<P, E> {
     /// Boot (out of service: it may erase): pick the newest valid
     /// parameter set (else `default`), count the boot, record the reset
     /// and its cause, and leave the event queue room for in-service
-    /// events.
+    /// events. ([`Self::new`] and [`Self::boot_up`] in two steps, for a
+    /// device built in place in a static.)
     pub async fn start(
-        mut storage: Storage<P, E>,
+        storage: Storage<P, E>,
         info: DeviceInfo,
         default: &Params,
         cause: ResetCause,
     ) -> Self {
-        let active = storage.load_params(default).await;
-        let boot = storage.bump_boot().await;
-        let _ = storage
-            .append_event_making_room(&EventRecord {
-                boot,
-                uptime_ms: 0,
-                kind: EventKind::Reset { cause },
-            })
-            .await;
-        let mut dev = Self {
+        let mut dev = Self::new(storage, info, default);
+        dev.boot_up(cause).await;
+        dev
+    }
+
+    /// A device not booted yet, running `default` (version 0).
+    pub fn new(storage: Storage<P, E>, info: DeviceInfo, default: &Params) -> Self {
+        let mut active_enc = [0; PARAMS_MAX];
+        let enc = encode_params(default, &mut active_enc).unwrap_or(&[]);
+        let id = crate::storage::params_id(enc, 0);
+        let active_len = enc.len();
+        Self {
             storage,
             info,
-            active,
-            active_enc: [0; PARAMS_MAX],
-            active_len: 0,
+            active: Loaded {
+                params: default.clone(),
+                id,
+                stored: false,
+            },
+            active_enc,
+            active_len,
             upload: Upload {
                 open: false,
                 len: 0,
@@ -89,16 +96,32 @@ impl<P: NorFlash, E: NorFlash> Device<P, E> {
                 got: 0,
                 buf: [0; PARAMS_MAX],
             },
-            boot,
+            boot: 0,
             streaming: false,
             builder: BlockBuilder::new(),
             changed: false,
             pending: heapless::Deque::new(),
             lost: 0,
-        };
-        dev.active_len =
-            encode_params(&dev.active.params, &mut dev.active_enc).map_or(0, |e| e.len());
-        dev
+        }
+    }
+
+    /// Boot (see [`Self::start`]), in place.
+    pub async fn boot_up(&mut self, cause: ResetCause) {
+        let loaded = self.storage.load_params(&self.active.params).await;
+        if loaded.stored {
+            self.active_len =
+                encode_params(&loaded.params, &mut self.active_enc).map_or(0, |e| e.len());
+            self.active = loaded;
+        }
+        self.boot = self.storage.bump_boot().await;
+        let _ = self
+            .storage
+            .append_event_making_room(&EventRecord {
+                boot: self.boot,
+                uptime_ms: 0,
+                kind: EventKind::Reset { cause },
+            })
+            .await;
     }
 
     /// The active parameter set.

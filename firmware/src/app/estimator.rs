@@ -71,11 +71,8 @@ pub async fn run<S: SampleSource, R: RelayOutput, C: CycleCounter>(
             overrun_at_us: core::mem::take(&mut overran)
                 .then(|| Instant::now().duration_since(t0).as_micros()),
         };
-        if let Some(set) = shared.take_new_set() {
-            // Validated by the link; a refusal here keeps the old set.
-            if estimator.reconfigure(&set.params).is_ok() {
-                boot.identity = set.identity;
-            }
+        if let Some(identity) = shared.take_monitor(|m| estimator.swap_monitor(m)) {
+            boot.identity = identity;
         }
         let out = estimator.on_block(raw, &inputs);
         shared.pass(super::supervisor::ESTIMATOR);

@@ -15,8 +15,9 @@ use embedded_storage_async::nor_flash::NorFlash;
 use link::frame::{encode, Decoder, MAX_WIRE};
 use link::{Device, Loaded, Message};
 use monitor::protocol::{IdentityFrame, Node};
+use monitor::Monitor;
 
-use super::shared::{NewSet, Shared};
+use super::shared::Shared;
 use crate::board::{Disconnected, SerialPort};
 
 /// The longest a write to the host may take before the host counts as
@@ -105,11 +106,7 @@ async fn session<S: SerialPort, P: NorFlash, E: NorFlash>(
                         shared.stream.set_streaming(device.streaming());
                     }
                     if device.take_changed() {
-                        let loaded = device.params();
-                        shared.reconfigure(NewSet {
-                            params: loaded.params.clone(),
-                            identity: identity_frame(node, loaded),
-                        });
+                        restart_monitor(device.params(), node, shared);
                     }
                     write(port, &tx[..len]).await?;
                 }
@@ -130,6 +127,28 @@ async fn session<S: SerialPort, P: NorFlash, E: NorFlash>(
                 let _ = device.log(uptime_ms, kind).await;
             }
         }
+    }
+}
+
+/// How long the link task waits for the estimator to take a new monitor
+/// (it takes it at its next block, within 1 ms, unless it stalled).
+const SWAP_TIMEOUT: Duration = Duration::from_millis(100);
+
+/// Build the monitor on the set now active (here, not in the estimator:
+/// see `Shared::lend_monitor`) and have the estimator restart on it.
+/// Not inlined: the monitor lives in this frame, on the stack, only
+/// while it is lent.
+#[inline(never)]
+fn restart_monitor(loaded: &Loaded, node: Node, shared: &Shared) {
+    // The device validated the set, as `Monitor::new` does again.
+    let Ok(mut monitor) = Monitor::new(&loaded.params) else {
+        return;
+    };
+    let until = Instant::now() + SWAP_TIMEOUT;
+    if !shared.lend_monitor(&mut monitor, identity_frame(node, loaded), || {
+        Instant::now() > until
+    }) {
+        defmt::warn!("the estimator did not take the new parameter set's monitor");
     }
 }
 

@@ -3,7 +3,7 @@
 //! estimator never waits for a low-priority task.
 
 use core::cell::{Cell, RefCell};
-use core::sync::atomic::{AtomicBool, AtomicU16, AtomicU32, AtomicU8, Ordering};
+use core::sync::atomic::{AtomicBool, AtomicPtr, AtomicU16, AtomicU32, AtomicU8, Ordering};
 
 use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::blocking_mutex::Mutex;
@@ -14,19 +14,11 @@ use monitor::device::alarm::AlarmOutput;
 use monitor::device::deadline::LoadReport;
 use monitor::device::diagnostics::flow::Checkpoint;
 use monitor::device::diagnostics::{DeviceFault, DeviceFaults};
-use monitor::params::Params;
 use monitor::protocol::outbox::Outbox;
 use monitor::protocol::{AlarmFrame, Command, IdentityFrame, Message};
+use monitor::Monitor;
 
 use super::stream::SampleStream;
-
-/// A parameter set the link task stored and the estimator must run on.
-pub struct NewSet {
-    /// The set (validated by the link's device).
-    pub params: Params,
-    /// Its `LM_Identity`.
-    pub identity: IdentityFrame,
-}
 
 /// Events on their way to the event memory: ms since boot and the event.
 pub type MemoryEvent = (u32, link::EventKind);
@@ -128,7 +120,10 @@ pub struct Shared {
     pub ack: AckShared,
     /// Sample blocks for the commissioning link.
     pub stream: SampleStream,
-    new_set: Signal<CriticalSectionRawMutex, NewSet>,
+    /// A monitor on a new parameter set, lent by the link task for the
+    /// estimator to swap in (see [`Shared::lend_monitor`]); null if none.
+    next_monitor: AtomicPtr<Monitor<f32>>,
+    next_identity: Mutex<CriticalSectionRawMutex, Cell<Option<IdentityFrame>>>,
     memory: Channel<CriticalSectionRawMutex, MemoryEvent, 8>,
     memory_dropped: AtomicU32,
 }
@@ -206,7 +201,8 @@ impl Shared {
                 changed: Signal::new(),
             },
             stream: SampleStream::new(),
-            new_set: Signal::new(),
+            next_monitor: AtomicPtr::new(core::ptr::null_mut()),
+            next_identity: Mutex::new(Cell::new(None)),
             memory: Channel::new(),
             memory_dropped: AtomicU32::new(0),
         }
@@ -265,14 +261,62 @@ impl Shared {
         self.log_dropped.load(Ordering::Relaxed)
     }
 
-    /// Link task: run the monitor on a new parameter set.
-    pub fn reconfigure(&self, set: NewSet) {
-        self.new_set.signal(set);
+    /// Link task: the estimator must restart on `monitor` (a new
+    /// parameter set with the identity `identity`). Lends it to the
+    /// estimator and waits, without yielding, until the estimator swapped
+    /// it with the running one (at its next block) or `give_up()` says so;
+    /// `monitor` then holds the old monitor, or the new one if it was not
+    /// taken (returns false).
+    ///
+    /// Built by the caller and lent, not moved into a static: a static
+    /// slot would cost a monitor's worth of RAM (4 KiB) for ever, and
+    /// building it in the estimator would put `Monitor::new`'s 13 KiB of
+    /// stack on the estimator's interrupt.
+    pub fn lend_monitor(
+        &self,
+        monitor: &mut Monitor<f32>,
+        identity: IdentityFrame,
+        mut give_up: impl FnMut() -> bool,
+    ) -> bool {
+        self.next_identity.lock(|c| c.set(Some(identity)));
+        let lent: *mut Monitor<f32> = monitor;
+        self.next_monitor.store(lent, Ordering::Release);
+        loop {
+            if self.next_monitor.load(Ordering::Acquire).is_null() {
+                return true;
+            }
+            if give_up() {
+                // Withdrawn, unless the estimator took it meanwhile.
+                return self
+                    .next_monitor
+                    .compare_exchange(
+                        lent,
+                        core::ptr::null_mut(),
+                        Ordering::AcqRel,
+                        Ordering::Acquire,
+                    )
+                    .is_err();
+            }
+        }
     }
 
-    /// Estimator: the new parameter set to run on, if one came.
-    pub fn take_new_set(&self) -> Option<NewSet> {
-        self.new_set.try_take()
+    /// Estimator: swap in the monitor lent, if one is (`swap` exchanges it
+    /// with the running one); its identity.
+    pub fn take_monitor(&self, swap: impl FnOnce(&mut Monitor<f32>)) -> Option<IdentityFrame> {
+        let lent = self.next_monitor.load(Ordering::Acquire);
+        if lent.is_null() {
+            return None;
+        }
+        // SAFETY: the pointer is to the lender's `&mut Monitor`, which it
+        // does not touch until the pointer is null again. The estimator
+        // runs above the lender's priority on a single core: the lender
+        // cannot resume (and withdraw or drop it) before this returns,
+        // and it clears the pointer only after the swap.
+        swap(unsafe { &mut *lent });
+        let identity = self.next_identity.lock(Cell::take);
+        self.next_monitor
+            .store(core::ptr::null_mut(), Ordering::Release);
+        identity
     }
 
     /// Estimator: an event for the event memory (dropped and counted if
