@@ -15,7 +15,8 @@
 #    params upload` sends it; the identity host-sim prints must be the one
 #    the firmware then sends in LM_Identity, which QEMU checks switched
 #    once from the compiled-in set while the monitor restarted (relay
-#    dropped).
+#    dropped), and the event memory (`host-sim events`) must hold the
+#    reset, the alarms the case raised, and the parameter change.
 #
 # Exits non-zero, saying why, on any failure. Run by scripts/test.sh.
 #   scripts/qemu-link-e2e.sh
@@ -56,10 +57,16 @@ expected=$out_dir/both.samples.csv
 
 STEP=record
 port=$(qemu_serial_free_port)
-qemu_serial_start "$record_elf" "$port"
+# Virtual time tied to the host's clock: the firmware leaves the host
+# 3 s after the recording to read its event memory.
+QEMU_ICOUNT=shift=0,sleep=on qemu_serial_start "$record_elf" "$port"
 echo "qemu-link-e2e: record from $(basename "$record_elf") on 127.0.0.1:$port"
 "$host_sim" record "tcp:127.0.0.1:$port" -o "$work/both.csv.gz" --duration 8 \
   --note "QEMU end-to-end" || fail "host-sim record"
+"$host_sim" events "tcp:127.0.0.1:$port" | tee "$work/events.txt" || fail "host-sim events"
+# The event memory: this boot's reset, and the alarms the case raises.
+grep -qE '^ +1 +0\.000 +reset \(power_on\)$' "$work/events.txt" || fail "no power-on reset in the event memory"
+grep -qE 'alarm raised: both leak' "$work/events.txt" || fail "no 'both' alarm in the event memory"
 status=0
 qemu_serial_wait 120 || status=$?
 grep -E 'heartbeat|commissioning link|all checks passed|FAILED' "$QEMU_SERIAL_OUT" || true
@@ -70,7 +77,7 @@ qemu_serial_cleanup
 
 STEP=upload
 port=$(qemu_serial_free_port)
-qemu_serial_start "$upload_elf" "$port"
+QEMU_ICOUNT=shift=0,sleep=on qemu_serial_start "$upload_elf" "$port"
 echo "qemu-link-e2e: upload to $(basename "$upload_elf") on 127.0.0.1:$port"
 "$host_sim" params show "tcp:127.0.0.1:$port" >"$work/running.toml" || fail "host-sim params show"
 grep -q '^force_offset_n = 0.0$' "$work/running.toml" || fail "no force_offset_n = 0.0 in the running set"
@@ -79,6 +86,7 @@ grep -q '^force_offset_n = 0.0$' "$work/running.toml" || fail "no force_offset_n
 sed 's/^force_offset_n = 0.0$/force_offset_n = 5.0/' "$work/running.toml" >"$work/site.toml"
 "$host_sim" params upload "tcp:127.0.0.1:$port" "$work/site.toml" | tee "$work/upload.txt" ||
   fail "host-sim params upload"
+"$host_sim" events "tcp:127.0.0.1:$port" | tee "$work/events-after.txt" || fail "host-sim events"
 status=0
 qemu_serial_wait 300 || status=$?
 grep -E 'parameter set|LM_Identity' "$QEMU_SERIAL_OUT" || true
@@ -89,5 +97,7 @@ sent=$(grep -oE 'after it version [0-9]+ crc [0-9a-f]{8}' "$QEMU_SERIAL_OUT" | s
 [ -n "$said" ] && [ "$said" = "$sent" ] ||
   fail "host-sim says the active set is '$said', LM_Identity carries '$sent'"
 echo "qemu-link-e2e: LM_Identity carries the uploaded set ($sent)"
+grep -qF "parameters changed: $sent" "$work/events-after.txt" ||
+  fail "no 'parameters changed: $sent' in the event memory"
 rm -rf "$work"
 echo "qemu-link-e2e: all checks passed"

@@ -6,7 +6,8 @@
 //! - [`Link::Record`]: the machine starts when the host starts the
 //!   stream, so that `host-sim record` captures the case from its first
 //!   sample; every frame is checked as in the other runs, then the
-//!   stream: every block sent, none dropped, the host stopped it.
+//!   stream: every block sent, none dropped, the host stopped it; then the
+//!   host has a few seconds to read the event memory.
 //! - [`Link::Upload`]: the case plays in a loop while the host records a
 //!   few seconds (past the warm-up) and then uploads a parameter set;
 //!   `LM_Identity` must switch once, from the compiled-in set to the
@@ -47,6 +48,8 @@ type Flash = RamNorFlash<PAGE>;
 /// USART1's interrupt: below the estimator (as the STM32 board's USB
 /// interrupt), above the other tasks.
 const UART_PRIORITY: u8 = 7 << 4;
+/// How long the recording run goes on after the host stopped the stream.
+const EVENTS_WINDOW: Duration = Duration::from_secs(3);
 /// How long a checker waits for the host, virtual time (about half as
 /// long in wall time; the host's commands take a few virtual seconds).
 const HOST_TIMEOUT: Duration = Duration::from_secs(60);
@@ -196,8 +199,9 @@ pub async fn stream_checker(case: &'static EmuCase, t0: Instant, expect: Expect)
         if stopped { "stopped" } else { "never stopped" },
         if stream_ok { "" } else { " (FAILED)" }
     );
-    // The reply to the host's stop goes out before QEMU ends.
-    Timer::after_millis(20).await;
+    // Time for the host to read the event memory (`host-sim events`; the
+    // script runs this test with virtual time tied to the host's clock).
+    Timer::after(EVENTS_WINDOW).await;
     exit(frames_ok && stream_ok)
 }
 
