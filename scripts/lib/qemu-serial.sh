@@ -100,7 +100,7 @@ qemu_serial_start() {
     -kernel "$elf" >"$QEMU_SERIAL_OUT" 2>"$QEMU_SERIAL_ERR" &
   QEMU_SERIAL_PID=$!
   for ((i = 0; i < 100; i++)); do
-    if grep -q 'waiting for connection' "$QEMU_SERIAL_ERR"; then
+    if grep -q 'waiting for connection' "$QEMU_SERIAL_ERR" 2>/dev/null; then
       return 0
     fi
     if ! kill -0 "$QEMU_SERIAL_PID" 2>/dev/null; then
