@@ -202,19 +202,7 @@ fn record_and_upload_over_a_serial_port() {
     let path = slave.name().expect("pty name");
     master.set_timeout(Duration::from_millis(20)).unwrap();
     let mut master_rx = master.try_clone_native().unwrap();
-    let want = samples(&input);
-    let cfg = link::sim::SimConfig {
-        firmware: "9.9.9",
-        serial: "PTY-7".into(),
-        period_us: 1000,
-        source: Box::new(move |tick| want.get(tick as usize).copied()),
-        state: None,
-        drop_every: None,
-        corrupt_every: None,
-        default: Params::nominal(),
-    };
-    let mut dev = link::sim::spawn(cfg).unwrap();
-    dev.timeout = Duration::from_millis(5);
+    let mut dev = sim_device(&input, "PTY-7");
     let stop = Arc::new(AtomicBool::new(false));
     // One thread moves bytes both ways between the pty and the device.
     let s2 = stop.clone();
@@ -264,19 +252,7 @@ fn record_and_upload_over_tcp() {
     let listener = TcpListener::bind("127.0.0.1:0").unwrap();
     listener.set_nonblocking(true).unwrap();
     let port = format!("tcp:{}", listener.local_addr().unwrap());
-    let want = samples(&input);
-    let cfg = link::sim::SimConfig {
-        firmware: "9.9.9",
-        serial: "TCP-7".into(),
-        period_us: 1000,
-        source: Box::new(move |tick| want.get(tick as usize).copied()),
-        state: None,
-        drop_every: None,
-        corrupt_every: None,
-        default: Params::nominal(),
-    };
-    let mut dev = link::sim::spawn(cfg).unwrap();
-    dev.timeout = Duration::from_millis(5);
+    let mut dev = sim_device(&input, "TCP-7");
     let stop = Arc::new(AtomicBool::new(false));
     // One thread accepts each connection in turn and moves bytes both
     // ways between it and the device until the host closes it.
@@ -336,4 +312,24 @@ fn a_tcp_port_nobody_listens_on_is_a_clear_error() {
     assert!(!o.status.success());
     let err = text(&o.stderr);
     assert!(err.contains(&format!("{port}: cannot connect")), "{err}");
+}
+
+/// The simulated device (firmware "9.9.9", board serial `serial`)
+/// streaming the recording `input`, with a short read timeout for a
+/// bridge thread.
+fn sim_device(input: &str, serial: &str) -> link::sim::SimPort {
+    let want = samples(input);
+    let cfg = link::sim::SimConfig {
+        firmware: "9.9.9",
+        serial: serial.into(),
+        period_us: 1000,
+        source: Box::new(move |tick| want.get(tick as usize).copied()),
+        state: None,
+        drop_every: None,
+        corrupt_every: None,
+        default: Params::nominal(),
+    };
+    let mut dev = link::sim::spawn(cfg).unwrap();
+    dev.timeout = std::time::Duration::from_millis(5);
+    dev
 }
