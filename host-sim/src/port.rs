@@ -54,6 +54,9 @@ pub fn connect(port: &str) -> Result<Client<Box<dyn Port>>> {
         Box::new(
             serialport::new(port, BAUD)
                 .timeout(READ_TIMEOUT)
+                // The board's USB CDC-ACM session lasts while DTR is held
+                // (Windows does not assert it by itself).
+                .dtr_on_open(true)
                 .open()
                 .with_context(|| format!("{port}: cannot open the serial port"))?,
         )
