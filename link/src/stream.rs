@@ -40,7 +40,16 @@ impl BlockBuilder {
     }
 
     /// Add the sample of monitor step `tick`; returns a completed block.
+    /// A block holds consecutive steps only: when `tick` does not follow
+    /// the previous sample (the device lost samples), the partial block
+    /// is abandoned — its sequence number used and counted as dropped,
+    /// so the host sees the gap — and a new one starts at `tick`.
     pub fn push(&mut self, tick: u32, sample: &Sample) -> Option<SampleBlock> {
+        if self.fill > 0 && tick != self.block.first_tick.wrapping_add(self.fill as u32) {
+            self.fill = 0;
+            self.next_seq = self.next_seq.wrapping_add(1);
+            self.dropped();
+        }
         if self.fill == 0 {
             self.block.first_tick = tick;
         }
@@ -166,6 +175,23 @@ impl StreamClock {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_gap_in_the_steps_abandons_the_partial_block() {
+        let s = Sample::default();
+        let mut b = BlockBuilder::new();
+        for tick in 0..3 {
+            assert!(b.push(tick, &s).is_none());
+        }
+        // Steps 3..=6 lost: the partial block (0..3) is dropped.
+        let mut done = None;
+        for tick in 7..7 + SAMPLES_PER_BLOCK as u32 {
+            done = done.or(b.push(tick, &s));
+        }
+        let block = done.expect("a whole block after the gap");
+        assert_eq!((block.seq, block.first_tick, block.dropped), (1, 7, 1));
+        assert_eq!((b.completed(), b.dropped_count()), (2, 1));
+    }
 
     #[test]
     fn clock_survives_the_counter_wrap_and_gaps() {

@@ -24,7 +24,10 @@ pub struct SampleStream {
     generation: AtomicU32,
     blocks: Channel<CriticalSectionRawMutex, SampleBlock, QUEUED_BLOCKS>,
     completed: AtomicU32,
+    /// Blocks the estimator dropped (queue full, or samples lost).
     dropped: AtomicU32,
+    /// Blocks the link task took but could not send.
+    unsent: AtomicU32,
 }
 
 impl Default for SampleStream {
@@ -42,6 +45,7 @@ impl SampleStream {
             blocks: Channel::new(),
             completed: AtomicU32::new(0),
             dropped: AtomicU32::new(0),
+            unsent: AtomicU32::new(0),
         }
     }
 
@@ -54,6 +58,7 @@ impl SampleStream {
             self.blocks.clear();
             self.completed.store(0, Ordering::Relaxed);
             self.dropped.store(0, Ordering::Relaxed);
+            self.unsent.store(0, Ordering::Relaxed);
             self.generation.fetch_add(1, Ordering::AcqRel);
             self.on.store(true, Ordering::Release);
         }
@@ -66,7 +71,7 @@ impl SampleStream {
 
     /// Link task: a block taken from the queue could not be sent.
     pub fn lost(&self) {
-        self.dropped.fetch_add(1, Ordering::AcqRel);
+        self.unsent.fetch_add(1, Ordering::AcqRel);
     }
 
     /// Link task: the next complete block.
@@ -76,9 +81,10 @@ impl SampleStream {
 
     /// Blocks completed (sent or dropped) and dropped in this stream.
     pub fn progress(&self) -> (u32, u32) {
+        let dropped = self.dropped.load(Ordering::Acquire);
         (
             self.completed.load(Ordering::Acquire),
-            self.dropped.load(Ordering::Acquire),
+            dropped.wrapping_add(self.unsent.load(Ordering::Acquire)),
         )
     }
 }
@@ -114,16 +120,18 @@ impl StreamTap {
             self.generation = generation;
             self.builder = BlockBuilder::new();
         }
-        let Some(block) = self.builder.push(tick, sample) else {
-            return;
-        };
-        if stream.blocks.try_send(block).is_err() {
-            stream.lost();
+        // (A gap in the ticks — samples lost after an ADC overrun —
+        // makes the builder drop its partial block.)
+        if let Some(block) = self.builder.push(tick, sample) {
+            if stream.blocks.try_send(block).is_err() {
+                self.builder.dropped();
+            }
         }
         stream
             .completed
             .store(self.builder.completed(), Ordering::Release);
-        // (The drops are counted in `stream`, not by the builder: the
-        // link task loses blocks too when the host goes away.)
+        stream
+            .dropped
+            .store(self.builder.dropped_count(), Ordering::Release);
     }
 }
