@@ -204,7 +204,7 @@ pub async fn run<W: Watchdog, R: RelayOutput, L: StatusLed, S: SelfTest>(
         if checks.is_multiple_of(SUMMARY_EVERY) {
             let load = shared.load();
             defmt::info!(
-                "{=u64} s: {} | samples {} missed {} | load {}% peak {}% | CAN sent {} dropped {} replaced {} rejected {} bus errors {} | log dropped {}",
+                "{=u64} s: {} | samples {} missed {} | load {}% peak {}% | CAN sent {} dropped {} replaced {} rejected {} bus errors {} | log dropped {} | events not remembered {}",
                 now_ms / 1000,
                 state,
                 processed,
@@ -216,7 +216,8 @@ pub async fn run<W: Watchdog, R: RelayOutput, L: StatusLed, S: SelfTest>(
                 shared.replaced(),
                 shared.can.rejected.load(Ordering::Relaxed),
                 shared.can.bus_errors.load(Ordering::Relaxed),
-                shared.log_dropped()
+                shared.log_dropped(),
+                shared.memory_dropped()
             );
         }
     }
