@@ -98,11 +98,9 @@ async fn session<S: SerialPort, P: NorFlash, E: NorFlash>(
                     };
                     let (completed, dropped) = shared.stream.progress();
                     device.stream_progress(completed, dropped);
-                    let was_streaming = device.streaming();
                     let len = device.handle(&frame, uptime_ms(), tx).await;
-                    if device.streaming() != was_streaming
-                        || matches!(frame.msg, Message::StartStream)
-                    {
+                    // A start (again) begins a new stream; a stop ends it.
+                    if matches!(frame.msg, Message::StartStream | Message::StopStream) {
                         shared.stream.set_streaming(device.streaming());
                     }
                     if device.take_changed() {
