@@ -111,6 +111,18 @@ impl Params {
                 "",
             ));
         }
+        // No covered edge may leak backwards anywhere in the dead zone.
+        let skew = v.edge_leak_skew_a.abs().max(v.edge_leak_skew_b.abs())
+            + v.edge_leak_spool_gain * v.dead_zone;
+        if !(skew <= 0.95) {
+            return Err(relation(
+                "valve.edge_leak_spool_gain",
+                skew,
+                "(its product with valve.dead_zone plus the larger of |valve.edge_leak_skew_a|, |valve.edge_leak_skew_b|) must be ≤ 0.95 (no covered edge leaks backwards):",
+                0.95,
+                "",
+            ));
+        }
         let fr = &self.friction;
         if !(fr.breakaway_n >= fr.coulomb_n) {
             return Err(relation(

@@ -141,6 +141,9 @@ pub struct Plant<T> {
     null_offset: T,
     open_eps: T,
     k_edge: T,
+    k_skew_a: T,
+    k_skew_b: T,
+    k_skew_spool: T,
     k_seal: T,
     lam_dp: T,
     sqrt_lam_dp: T,
@@ -180,6 +183,9 @@ impl<T: Real> Plant<T> {
             null_offset: T::c(v.null_offset),
             open_eps: T::c(OPENING_ROUNDING),
             k_edge: T::c(lam(v.edge_leak_lpm_per_bar)),
+            k_skew_a: T::c(lam(v.edge_leak_lpm_per_bar) * v.edge_leak_skew_a),
+            k_skew_b: T::c(lam(v.edge_leak_lpm_per_bar) * v.edge_leak_skew_b),
+            k_skew_spool: T::c(lam(v.edge_leak_lpm_per_bar) * v.edge_leak_spool_gain),
             k_seal: T::c(lam(params.leakage.seal_lpm_per_bar)),
             lam_dp: T::c(v.laminar_dp_bar * BAR),
             sqrt_lam_dp: T::c((v.laminar_dp_bar * BAR).sqrt()),
@@ -291,8 +297,17 @@ impl<T: Real> Plant<T> {
         let ext_b = -(kv_ext_b * a_pos * g_bt);
         let ret_a = -(kv_ret * a_neg * g_at);
         let ret_b = kv_ret_b * a_neg * g_pb;
-        let q_a = ext_a + ret_a + k_edge * (p2 + p5 - p3 - p3);
-        let q_b = ext_b + ret_b + k_edge * (p2 + p5 - p4 - p4);
+        // Covered-edge asymmetry: P→A = k·(1 + s_a), A→T = k·(1 − s_a) (B
+        // alike), s_a = skew_a + g·x_v and s_b = skew_b − g·x_v with the
+        // spool held to the dead zone (calibrated; 0: symmetric edges).
+        let in_dz = xv.abs() < self.dead_zone;
+        let xv_dz = xv.clamp_to(-self.dead_zone, self.dead_zone);
+        let lam_ps = laminar * (p2 - p5);
+        let spool_skew = self.k_skew_spool * xv_dz;
+        let skew_a = (self.k_skew_a + spool_skew) * lam_ps;
+        let skew_b = (self.k_skew_b - spool_skew) * lam_ps;
+        let q_a = ext_a + ret_a + k_edge * (p2 + p5 - p3 - p3) + skew_a;
+        let q_b = ext_b + ret_b + k_edge * (p2 + p5 - p4 - p4) + skew_b;
 
         // --- Leaks: healthy seal leakage plus the hypothesised leaks.
         let leak_unit = T::c(LEAK_UNIT);
@@ -328,14 +343,19 @@ impl<T: Real> Plant<T> {
         let dp3 = ca * flow_a;
         let dp4 = cb * flow_b;
 
-        let dqa_dxv = kv_ext * da_pos * g_pa + kv_ret * da_neg * g_at;
-        let dqb_dxv = -(kv_ret_b * da_neg * g_pb) - kv_ext_b * da_pos * g_bt;
+        let dskew_dxv = if in_dz {
+            self.k_skew_spool * lam_ps
+        } else {
+            T::ZERO
+        };
+        let dqa_dxv = kv_ext * da_pos * g_pa + kv_ret * da_neg * g_at + dskew_dxv;
+        let dqb_dxv = -(kv_ret_b * da_neg * g_pb) - kv_ext_b * da_pos * g_bt - dskew_dxv;
         let dqa_dp3 = -(kv_ext * a_pos * dg_pa) - kv_ret * a_neg * dg_at - k_edge - k_edge;
         let dqb_dp4 = -(kv_ret_b * a_neg * dg_pb) - kv_ext_b * a_pos * dg_bt - k_edge - k_edge;
         // Laminar factor: d(healthy leakage)/d(state).
         let dlam = u.laminar_factor * T::c(LAMINAR_REF) / laminar;
-        let lam_a = k_edge * (p2 + p5 - p3 - p3) - k_seal * dp_int;
-        let lam_b = k_edge * (p2 + p5 - p4 - p4) + k_seal * dp_int;
+        let lam_a = k_edge * (p2 + p5 - p3 - p3) + skew_a - k_seal * dp_int;
+        let lam_b = k_edge * (p2 + p5 - p4 - p4) + skew_b + k_seal * dp_int;
         // Gains: each direction's metering flows scale with its gain.
         let dge = self.kv_ext * gref / kv_ext;
         let dgr = self.kv_ret * gref / kv_ret;

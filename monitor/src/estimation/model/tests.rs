@@ -50,6 +50,9 @@ fn plant_all_terms() -> Plant<f64> {
     p.valve.rod_edge_gain_extend = 1.03;
     p.valve.rod_edge_gain_retract = 0.97;
     p.leakage.external_lpm_per_bar = 2e-3;
+    p.valve.edge_leak_skew_a = 0.3;
+    p.valve.edge_leak_skew_b = -0.2;
+    p.valve.edge_leak_spool_gain = 20.0;
     Plant::new(&p)
 }
 
