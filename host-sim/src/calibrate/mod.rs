@@ -21,6 +21,13 @@
 //!    velocity; regressing flow/√Δp on the command gives the flow gain
 //!    (slope) and where the edge opens (intercept), hence the dead zone and
 //!    the null bias, and the rod-side/piston-side edge ratio.
+//!    **Covered edges**, from the holds (piston at rest, spool inside the
+//!    dead zone): where each chamber's pressure settles gives how its two
+//!    covered edges divide the land leakage (`valve.edge_leak_skew_a`,
+//!    `_b`) and how that shifts with the spool (`edge_leak_spool_gain`).
+//!    Kept only if steps 4–5 with it leave healthy detection readings at
+//!    least 5 % lower than with symmetric edges (one edge coefficient for
+//!    all four edges makes the filter's laminar state stand in for it).
 //! 2. **Load and friction**, from the force balance on the same samples:
 //!    gravity scale (also taken as the moving-mass scale), Coulomb and
 //!    viscous friction.

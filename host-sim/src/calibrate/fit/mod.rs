@@ -342,3 +342,123 @@ pub fn fit_load(d: &Prepared, p: &mut Params, fits: &mut Vec<Fit>, q: &mut Quali
         quality: "same regression".into(),
     });
 }
+
+/// Least hold time (samples with the spool covered and the piston at
+/// rest), s, for the covered-edge asymmetry; less keeps the edges as they
+/// were.
+pub const MIN_HOLD_S: f64 = 0.5;
+/// Spread (σ) of the spool position over the hold samples, fraction of
+/// travel, below which the spool's pressure gain is not fitted.
+const MIN_HOLD_SPOOL_SPREAD: f64 = 5e-4;
+/// Largest edge asymmetry the fit may give (|skew| + gain·dead zone).
+const MAX_SKEW: f64 = 0.9;
+
+/// Fit the covered edges' asymmetry from the holds: with the piston at
+/// rest and the spool inside the dead zone, chamber continuity is the
+/// land leakage alone, and where each chamber's pressure settles says how
+/// its two edges divide the leakage (`valve.edge_leak_skew_a`, `_b`) and
+/// how that shifts with the spool (`valve.edge_leak_spool_gain`): with the
+/// symmetric edges of one coefficient the model can hold only one pressure
+/// pair, and the filter's laminar state (or a leak state) makes up the rest.
+///
+/// With `spool` false the gain is left at 0. Returns the fit's line, or
+/// `None` (and, with `spool`, a warning) when the holds are too short.
+pub fn fit_edge_leak(
+    d: &Prepared,
+    p: &mut Params,
+    spool: bool,
+    warnings: &mut Vec<String>,
+) -> Option<Fit> {
+    let c = &p.cylinder;
+    let v = &p.valve;
+    let k_edge = v.edge_leak_lpm_per_bar / LPM_PER_M3S / BAR;
+    let k_seal = p.leakage.seal_lpm_per_bar / LPM_PER_M3S / BAR;
+    let k_ext = p.leakage.external_lpm_per_bar / LPM_PER_M3S / BAR;
+    // Covered with a margin for the rounded corner of the opening.
+    let covered = v.dead_zone - 0.004;
+    let still = MIN_SPEED / 3.0;
+    let span = 6 * HALF_WINDOW;
+    let n = d.p2.len();
+    let mut rows = Vec::new();
+    if k_edge > 0.0 && covered > 0.0 {
+        for i in (span..n.saturating_sub(span)).step_by(STRIDE) {
+            let vals = [d.p2[i], d.p3[i], d.p4[i], d.p5[i], d.u[i], d.v[i]];
+            if !vals.iter().all(|x| x.is_finite()) {
+                continue;
+            }
+            let xv = d.u[i] + v.null_offset;
+            let at_rest = [i - span, i, i + span]
+                .iter()
+                .all(|&j| d.v[j].abs() < still);
+            let steady = (d.p3[i + span] - d.p3[i - span])
+                .abs()
+                .max((d.p4[i + span] - d.p4[i - span]).abs())
+                < 1.0;
+            let (p2, p3, p4, p5) = (d.p2[i] * BAR, d.p3[i] * BAR, d.p4[i] * BAR, d.p5[i] * BAR);
+            if !(at_rest && steady && xv.abs() < covered && p2 - p5 > 5.0 * BAR) {
+                continue;
+            }
+            let ps = k_edge * (p2 - p5);
+            let seal = k_seal * (p3 - p4);
+            let sv = d.v[i];
+            // 0 = k·(p2 + p5 − 2p3) + k·s_a·(p2 − p5) − seal − A_p·v, B alike.
+            let sa = (seal + c.piston_area_m2 * sv - k_edge * (p2 + p5 - 2.0 * p3)) / ps;
+            let sb = (-seal + k_ext * (p4 - p5)
+                - c.rod_side_area_m2 * sv
+                - k_edge * (p2 + p5 - 2.0 * p4))
+                / ps;
+            rows.push((xv, sa, sb));
+        }
+    }
+    let hold_s = rows.len() as f64 * d.stride_s;
+    if hold_s < MIN_HOLD_S {
+        if spool {
+            warnings.push(format!(
+                "covered valve edges kept symmetric: {hold_s:.2} s at rest with the spool inside the dead zone, need {MIN_HOLD_S} s"
+            ));
+        }
+        return None;
+    }
+    let m = rows.len() as f64;
+    let mean = |f: fn(&(f64, f64, f64)) -> f64| rows.iter().map(f).sum::<f64>() / m;
+    let (mx, ma, mb) = (mean(|r| r.0), mean(|r| r.1), mean(|r| r.2));
+    let sxx = rows.iter().map(|r| (r.0 - mx).powi(2)).sum::<f64>() / m;
+    // s_a = a + g·x, s_b = b − g·x: one slope from both chambers.
+    let mut g = 0.0;
+    if spool && sxx.sqrt() >= MIN_HOLD_SPOOL_SPREAD {
+        let sxy = rows
+            .iter()
+            .map(|r| (r.0 - mx) * ((r.1 - ma) - (r.2 - mb)))
+            .sum::<f64>()
+            / m;
+        g = (sxy / (2.0 * sxx)).clamp(0.0, 0.5 * MAX_SKEW / v.dead_zone);
+    }
+    if !spool && !(sxx.sqrt() >= MIN_HOLD_SPOOL_SPREAD) {
+        // Same as the fit with the spool gain: nothing new to try.
+        return None;
+    }
+    let room = MAX_SKEW - g * v.dead_zone;
+    let a = (ma - g * mx).clamp(-room, room);
+    let b = (mb + g * mx).clamp(-room, room);
+    let rms = (rows
+        .iter()
+        .map(|r| (r.1 - a - g * r.0).powi(2) + (r.2 - b + g * r.0).powi(2))
+        .sum::<f64>()
+        / (2.0 * m))
+        .sqrt();
+    p.valve.edge_leak_skew_a = a;
+    p.valve.edge_leak_skew_b = b;
+    p.valve.edge_leak_spool_gain = g;
+    Some(Fit {
+        what: "covered valve edges (land leakage asymmetry)".into(),
+        value: format!(
+            "skew A {a:+.3}, B {b:+.3} (P→A/A→T {:.2}, P→B/B→T {:.2}), spool gain {g:.1} per travel",
+            (1.0 + a) / (1.0 - a),
+            (1.0 + b) / (1.0 - b)
+        ),
+        quality: format!(
+            "{hold_s:.1} s at rest, spool σ {:.4}, residual {rms:.3} of the edge leakage",
+            sxx.sqrt()
+        ),
+    })
+}
