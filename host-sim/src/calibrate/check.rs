@@ -27,6 +27,9 @@ pub struct Run {
     pub leak_max_lpm: [f64; 2],
     /// Largest |detection reading| (0.25 s average), l/min.
     pub detect_max_lpm: [f64; 2],
+    /// The same per leak and valve-command region at the time of the
+    /// reading ([`REGIONS`]): `[leak][region]`, l/min.
+    pub detect_region_max_lpm: [[f64; 3]; 2],
     /// Fraction of the counted time with evidence weight > 0.5.
     pub evidence_fraction: f64,
     /// Sensor-fault events and filter restarts (faults, gaps, numerical
@@ -113,7 +116,12 @@ pub fn run_pieces(
                 r.leak_max_lpm[k] = r.leak_max_lpm[k].max((a as f64).abs());
             }
             if let Some(d) = det {
-                r.detect_max_lpm[k] = r.detect_max_lpm[k].max((d as f64).abs());
+                let d = (d as f64).abs();
+                r.detect_max_lpm[k] = r.detect_max_lpm[k].max(d);
+                if let Some(u) = s.u_valve {
+                    let m = &mut r.detect_region_max_lpm[k][operating_region(u, band)];
+                    *m = m.max(d);
+                }
             }
         }
         if let (Some([.., both]), Some(u)) = (m.filter_states(), s.u_valve) {

@@ -140,22 +140,21 @@ pub(super) fn calibrate_with(
     // Alarms on the held-out part are judged with the floor the fit part
     // alone would set: the floor is how the monitor lives with the model
     // error it measured.
-    let part_floor = check::run_pieces(
+    let part_run = check::run_pieces(
         &fit_pieces,
         &part.params,
         (f64::NEG_INFINITY, f64::INFINITY),
-    )?
-    .detect_max_lpm
-    .map(|d| FLOOR_MARGIN * d);
+    )?;
+    let part_floor = Floors::of(&[&part_run], part.params.alarm.alarm_lpm);
     let mut floored = part.params.clone();
-    floored.baseline.detection_floor_lpm = part_floor.map(|f| f.min(MAX_DETECTION_FLOOR_LPM));
+    part_floor.set(&mut floored);
     let vf = check::run_pieces(&[samples], &floored, held.t)?;
     if let Some((t, verdict)) = vf.alarms.first() {
         failed.push(format!(
-            "a leak alarm ({}) at t = {t:.1} s on a recording declared healthy, with the detection floor of the fit part ({:.3} / {:.3} l/min)",
+            "a leak alarm ({}) at t = {t:.1} s on a recording declared healthy, with the detection floor of the fit part (up to {:.2} / {:.2} l/min)",
             verdict.name(),
-            part_floor[0],
-            part_floor[1]
+            part_floor.highest(0),
+            part_floor.highest(1)
         ));
     }
     // What the leak-free installation still reads on the held-out part
@@ -272,25 +271,64 @@ pub(super) fn calibrate_with(
     // The detection floor: what this leak-free installation still reads,
     // with a margin, wherever it exceeds the user's alarm level.
     let alarm = cal.params.alarm.alarm_lpm;
-    let floor: [f64; 2] = core::array::from_fn(|k| {
-        let seen = after.detect_max_lpm[k].max(v.detect_max_lpm[k]);
-        let f = FLOOR_MARGIN * seen;
-        if f > alarm {
-            // Rounded up to 0.01 l/min: a figure an engineer reads.
-            ((f * 100.0).ceil() / 100.0).min(MAX_DETECTION_FLOOR_LPM)
-        } else {
-            0.0
-        }
-    });
-    cal.params.baseline.detection_floor_lpm = floor;
-    if floor.iter().any(|f| *f > 0.0) {
+    let floors = Floors::of(&[&after, &v], alarm);
+    floors.set(&mut cal.params);
+    if floors.region.iter().flatten().any(|f| *f > 0.0) {
+        let show = |k: usize| {
+            let f = floors.region[k].map(|f| alarm.max(f));
+            format!("{:.2} / {:.2} / {:.2}", f[0], f[1], f[2])
+        };
         cal.warnings.push(format!(
-            "detection floor: this installation's leak-free readings reach {:.3} / {:.3} l/min (internal / external); leaks alarm from {:.2} / {:.2} l/min instead of the alarm level {alarm} l/min",
+            "detection floor: this installation's leak-free readings reach {:.3} / {:.3} l/min (internal / external); leaks alarm from internal {} and external {} l/min (retracting / holding / extending) instead of the alarm level {alarm} l/min",
             after.detect_max_lpm[0].max(v.detect_max_lpm[0]),
             after.detect_max_lpm[1].max(v.detect_max_lpm[1]),
-            alarm.max(floor[0]),
-            alarm.max(floor[1]),
+            show(0),
+            show(1),
         ));
     }
     cal.checked()
+}
+
+/// The detection floors the leak-free runs of an installation call for.
+struct Floors {
+    /// Per leak and region (`check::REGIONS`), l/min: [`FLOOR_MARGIN`] ×
+    /// the largest detection reading seen in that region, rounded up to
+    /// 0.01 l/min (a figure an engineer reads) where it exceeds the alarm
+    /// level, else 0; at most [`MAX_DETECTION_FLOOR_LPM`].
+    region: [[f64; 3]; 2],
+}
+
+impl Floors {
+    fn of(runs: &[&check::Run], alarm_lpm: f64) -> Self {
+        let region = core::array::from_fn(|k| {
+            core::array::from_fn(|r| {
+                let seen = runs
+                    .iter()
+                    .map(|run| run.detect_region_max_lpm[k][r])
+                    .fold(0.0, f64::max);
+                let f = FLOOR_MARGIN * seen;
+                if f > alarm_lpm {
+                    ((f * 100.0).ceil() / 100.0).min(MAX_DETECTION_FLOOR_LPM)
+                } else {
+                    0.0
+                }
+            })
+        });
+        Self { region }
+    }
+
+    /// The highest floor of leak `k` over the regions, l/min.
+    fn highest(&self, k: usize) -> f64 {
+        self.region[k].iter().copied().fold(0.0, f64::max)
+    }
+
+    /// Into `p`'s baseline: the lowest region's floor everywhere, the
+    /// regions' above it.
+    fn set(&self, p: &mut Params) {
+        let lowest = |k: usize| self.region[k].iter().copied().fold(f64::INFINITY, f64::min);
+        let b = &mut p.baseline;
+        b.detection_floor_lpm = [lowest(0), lowest(1)];
+        b.region_floor_internal_lpm = self.region[0];
+        b.region_floor_external_lpm = self.region[1];
+    }
 }

@@ -122,10 +122,11 @@ pub struct Decision<T> {
     latch: Latch,
     warning: bool,
     mismatch: bool,
-    /// Alarm and warning levels per leak, l/min: the user's levels, raised
-    /// to the installation's detection floor.
-    alarm_lpm: PerLeak<T>,
-    warning_lpm: PerLeak<T>,
+    /// Alarm and warning levels per leak and operating region
+    /// (retracting, holding, extending), l/min: the user's levels, raised
+    /// to the installation's detection floor there.
+    alarm_lpm: PerLeak<[T; 3]>,
+    warning_lpm: PerLeak<[T; 3]>,
     debounce_s: T,
     min_probability: T,
     /// Per leak: the healthy baseline coefficient per region (retracting,
@@ -155,8 +156,15 @@ impl<T: Real> Decision<T> {
     /// Decision state for `params`' thresholds.
     pub fn new(params: &Params) -> Self {
         let f = &params.filter;
-        let [floor_internal, floor_external] = params.baseline.detection_floor_lpm;
-        let floor = PerLeak::new(floor_internal, floor_external);
+        let b = &params.baseline;
+        let [floor_internal, floor_external] = b.detection_floor_lpm;
+        // Per leak and region: the larger of the floor everywhere and the
+        // region's.
+        let floor = PerLeak::new(
+            b.region_floor_internal_lpm.map(|f| f.max(floor_internal)),
+            b.region_floor_external_lpm.map(|f| f.max(floor_external)),
+        );
+        let a = &params.alarm;
         Self {
             slow_s: T::c(f.evidence_window_s),
             fast_s: T::c(f.detection_window_s),
@@ -176,12 +184,10 @@ impl<T: Real> Decision<T> {
             latch: Latch::new(),
             warning: false,
             mismatch: false,
-            alarm_lpm: floor.map(|floor| T::c(params.alarm.alarm_lpm.max(floor))),
-            warning_lpm: floor.map(|floor| {
-                // The warning keeps its ratio to the alarm level.
-                let a = &params.alarm;
-                T::c(a.warning_lpm * a.alarm_lpm.max(floor) / a.alarm_lpm)
-            }),
+            alarm_lpm: floor.map(|f| f.map(|f| T::c(a.alarm_lpm.max(f)))),
+            // The warning keeps its ratio to the alarm level.
+            warning_lpm: floor
+                .map(|f| f.map(|f| T::c(a.warning_lpm * a.alarm_lpm.max(f) / a.alarm_lpm))),
             debounce_s: T::c(params.alarm.debounce_s),
             min_probability: T::c(params.alarm.min_probability),
             baseline: PerLeak::new(
@@ -329,8 +335,8 @@ impl<T: Real> Decision<T> {
         let mut new_leak = false;
         for k in Leak::ALL {
             let excess = if self.supports(k) {
-                ((self.fast_lower[k] - self.alarm_lpm[k]) / self.alarm_lpm[k])
-                    .clamp_to(-T::ONE, T::c(EXCESS_MAX))
+                let level = self.alarm_lpm[k][region];
+                ((self.fast_lower[k] - level) / level).clamp_to(-T::ONE, T::c(EXCESS_MAX))
             } else {
                 -T::ONE
             };
@@ -346,7 +352,7 @@ impl<T: Real> Decision<T> {
             }
         }
         // Each leak against its own warning level, with hysteresis.
-        let over = |k: Leak, scale: T| self.slow[k] >= self.warning_lpm[k] * scale;
+        let over = |k: Leak, scale: T| self.slow[k] >= self.warning_lpm[k][region] * scale;
         let level_reached = over(Leak::Internal, T::ONE) || over(Leak::External, T::ONE);
         let release = T::c(WARNING_RELEASE);
         let still = over(Leak::Internal, release) || over(Leak::External, release);
@@ -481,4 +487,64 @@ impl<T: Real> Decision<T> {
 #[inline(always)]
 fn follow<T: Real>(x: &mut T, a: T, target: T) {
     *x += a * (target - *x);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::estimation::bank::FilterOutput;
+
+    /// A filter output whose `both` filter reads `internal_lpm` of
+    /// internal leak, certain (σ 0), with every hypothesis fitting alike
+    /// except that the leak ones fit better.
+    fn outputs(internal_lpm: f64) -> [Option<FilterOutput<f64>>; 4] {
+        core::array::from_fn(|i| {
+            Some(FilterOutput {
+                nis: 3.0,
+                // The internal-leak hypotheses explain the data best.
+                log_likelihood: if i == 1 || i == 3 { 0.0 } else { -50.0 },
+                flow_internal_lpm: internal_lpm,
+                flow_external_lpm: 0.0,
+                flow_internal_sd_lpm: 0.0,
+                flow_external_sd_lpm: 0.0,
+                dp_10bar: [1.0, 1.0],
+                innovation_sq: [0.0; 3],
+                predicted_var: [1.0; 3],
+                valve_gain: [0.0; 2],
+                valve_flow_lpm: 0.0,
+            })
+        })
+    }
+
+    /// Seconds until the internal leak is raised, reading `lpm` steadily
+    /// in `region` (None: not within 10 s).
+    fn time_to_alarm(p: &Params, lpm: f64, region: usize) -> Option<f64> {
+        let mut d: Decision<f64> = Decision::new(p);
+        let mut events = Events::new();
+        let dt = 0.001;
+        for i in 0..10_000 {
+            let t = i as f64 * dt;
+            d.update(&outputs(lpm), dt, 1.0, true, region, t, &mut events);
+            if d.latched().contains(Leak::Internal) {
+                return Some(t);
+            }
+        }
+        None
+    }
+
+    #[test]
+    fn a_region_floor_raises_the_alarm_level_in_that_region_only() {
+        let mut p = Params::nominal();
+        p.baseline.detection_floor_lpm = [0.1, 0.0];
+        // Extending: this installation's metering error reads 0.4 l/min.
+        p.baseline.region_floor_internal_lpm = [0.0, 0.0, 0.6];
+        for region in [0, 1] {
+            let t = time_to_alarm(&p, 0.3, region);
+            assert!(t.is_some_and(|t| t < 2.0), "region {region}: {t:?}");
+        }
+        assert_eq!(time_to_alarm(&p, 0.3, 2), None);
+        assert!(time_to_alarm(&p, 1.5, 2).is_some());
+        // The floor everywhere still applies where a region's is lower.
+        assert_eq!(time_to_alarm(&p, 0.09, 0), None);
+    }
 }

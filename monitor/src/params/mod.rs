@@ -291,6 +291,17 @@ params_struct! {
         /// trusted to tell. 0: no floor.
         pub detection_floor_lpm: [f64; 2] = [0.0; 2],
             in (0.0 ..= 10.0, "l/min"),
+        /// The internal leak's detection floor per region `[retracting,
+        /// holding, extending]`, l/min, where it is higher than
+        /// `detection_floor_lpm`: the model error of a valve differs with
+        /// the direction of flow (metering during moves, land leakage at
+        /// holds), so the floor is set where the error is, not
+        /// everywhere. 0: `detection_floor_lpm` applies.
+        pub region_floor_internal_lpm: [f64; 3] = [0.0; 3],
+            in (0.0 ..= 10.0, "l/min"),
+        /// The same for the external leak, l/min.
+        pub region_floor_external_lpm: [f64; 3] = [0.0; 3],
+            in (0.0 ..= 10.0, "l/min"),
     }
 }
 
