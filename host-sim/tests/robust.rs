@@ -219,3 +219,55 @@ fn noise_is_estimated_and_leak_flows_are_never_negative() {
     // The transmitter's lag and quantisation shape the noise a little.
     assert!((0.25..0.5).contains(&sigma), "piston chamber σ {sigma} bar");
 }
+
+/// The 60 s healthy recording `host-sim eval` calibrates development rig
+/// `seed` from (its seeds as the plan draws them).
+fn calibration_recording(
+    seed: u64,
+    supply_bar: f64,
+    temp_c: f64,
+    motion: u64,
+    noise: u64,
+) -> Vec<monitor::Sample> {
+    let run = Run {
+        rig: RigSpec::random(seed, supply_bar, temp_c),
+        scenario: Scenario::ClosedLoop {
+            duration_s: 60.0,
+            seed: motion,
+        },
+        leak: Leak::default(),
+        faults: Vec::new(),
+        temp_column: seed.is_multiple_of(2),
+        sample_rate_hz: 1000.0,
+        noise_seed: noise,
+    };
+    plant::simulate(&run).iter().map(row_sample).collect()
+}
+
+#[test]
+fn calibration_bounds_the_laminar_leakage_where_the_installation_allows_it() {
+    use host_sim::calibrate::{calibrate, UNBOUNDED_LAMINAR_FACTOR};
+    let start = Params::nominal();
+    assert!(start.filter.laminar_factor_min > 0.0);
+    // Development rig 6 (100 bar, 40 °C): with the bound, the valve fit
+    // is implausible and the calibration would be refused; without it,
+    // the installation is described, and the report says so first.
+    let six = calibration_recording(6, 100.0, 40.0, 6690769000805646, 7552900874143786);
+    let cal = calibrate(&six, &start).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(
+        cal.params.filter.laminar_factor_min,
+        UNBOUNDED_LAMINAR_FACTOR
+    );
+    assert!(
+        cal.warnings[0].starts_with("healthy laminar leakage not bounded"),
+        "{:?}",
+        cal.warnings
+    );
+    // Development rig 5 (100 bar, 25 °C) keeps the bound.
+    let five = calibration_recording(5, 100.0, 25.0, 7213658928450607, 4719478531644651);
+    let cal = calibrate(&five, &start).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(
+        cal.params.filter.laminar_factor_min,
+        start.filter.laminar_factor_min
+    );
+}

@@ -44,6 +44,8 @@ struct Config<T> {
     warm_up_s: f64,
     /// Lowest leak coefficients (internal, external), l/min at 10 bar.
     leak_floor: [T; 2],
+    /// Lowest laminar-leakage deviation (scaled state).
+    laminar_floor: T,
     /// Stroke in the scaled position unit.
     stroke: T,
     /// Valve command band of the holding region: null ± dead zone.
@@ -129,6 +131,8 @@ impl<T: Real> Monitor<T> {
                 T::c(-10.0 * leakage.seal_lpm_per_bar),
                 T::c(-10.0 * leakage.external_lpm_per_bar.max(0.0)),
             ],
+            // factor = 1 + deviation · LAMINAR_REF ≥ laminar_factor_min.
+            laminar_floor: T::c((f.laminar_factor_min - 1.0) / LAMINAR_REF),
             stroke: T::c(params.cylinder.stroke_m / X_REF),
             hold_band: params.hold_band(),
         };
@@ -290,6 +294,7 @@ impl<T: Real> Monitor<T> {
                 self.quiet.gain_weight()
             },
             leak_floor: self.cfg.leak_floor,
+            laminar_floor: self.cfg.laminar_floor,
             stroke: self.cfg.stroke,
         };
         let mut ok: BankOutput<T> = [None; 4];

@@ -126,6 +126,9 @@ pub const MAX_VALIDATION_NIS: f64 = 9.0;
 /// excess to persist, and a 60 s recording does not show the worst of an
 /// hour.
 pub const FLOOR_MARGIN: f64 = 1.5;
+/// `filter.laminar_factor_min` of calibration's fallback: the laminar
+/// term a free nuisance, as before the bound (never reached in practice).
+pub const UNBOUNDED_LAMINAR_FACTOR: f64 = -5.0;
 /// A floor above this is no leak monitor: refuse, the model does not
 /// describe the installation (healthy readings up to 1.3 l/min).
 pub const MAX_DETECTION_FLOOR_LPM: f64 = 2.0;
@@ -267,7 +270,37 @@ pub struct Calibration {
 /// else kept as in `start`; the rest — noise, healthy leakage, per-region
 /// baseline, detection floor — is fitted and validated as usual. Refused
 /// only if that fails too (both reasons are returned).
+///
+/// The filters' healthy laminar leakage is bounded below
+/// (`filter.laminar_factor_min`); an installation that cannot be described
+/// with that bound is calibrated without it (said first among the
+/// warnings) before it is refused.
 pub fn calibrate(samples: &[Sample], start: &Params) -> Result<Calibration, CalibrationError> {
+    match calibrate_mechanics(samples, start) {
+        Err(e @ (CalibrationError::PoorFit { .. } | CalibrationError::ValidationFailed { .. }))
+            if start.filter.laminar_factor_min > 0.0 =>
+        {
+            let mut unbounded = start.clone();
+            unbounded.filter.laminar_factor_min = UNBOUNDED_LAMINAR_FACTOR;
+            let mut cal = calibrate_mechanics(samples, &unbounded)?;
+            cal.warnings.insert(
+                0,
+                format!(
+                    "healthy laminar leakage not bounded (filter.laminar_factor_min {UNBOUNDED_LAMINAR_FACTOR} instead of {}): with the bound, {e}",
+                    start.filter.laminar_factor_min
+                ),
+            );
+            Ok(cal)
+        }
+        r => r,
+    }
+}
+
+/// [`calibrate`] with `start`'s laminar bound: full, else partial.
+fn calibrate_mechanics(
+    samples: &[Sample],
+    start: &Params,
+) -> Result<Calibration, CalibrationError> {
     // A recording without moves in both directions cannot even validate
     // a partial calibration: the monitor must have seen both.
     let moves = Motion::of(&fit::prepare(samples));

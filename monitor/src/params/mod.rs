@@ -381,6 +381,15 @@ params_struct! {
         /// without a temperature reading is +100 %.
         pub laminar_prior: f64 = 0.5,
             in (0.0 ..= 5.0, ""),
+        /// Lowest healthy laminar leakage the filters may estimate, as a
+        /// fraction of what the temperature gives (1: as the viscosity
+        /// says). Leakage never runs backwards, and a factor far below 1
+        /// is the filter making up for model error with the term that is
+        /// collinear with an internal leak. Below 0 the term is a free
+        /// nuisance that may run backwards: calibration's fallback (−5)
+        /// for an installation the bound cannot describe.
+        pub laminar_factor_min: f64 = 0.1,
+            in (-5.0 ..= 1.0, ""),
         /// Random-walk intensity of each leak coefficient, (l/min at 10 bar)²/s.
         pub q_leak: f64 = 5.0e-3,
             in (0.0 ..= 10.0, "(l/min at 10 bar)²/s"),

@@ -97,6 +97,7 @@ impl<T: Real, const N: usize> HypothesisFilter<T, N> {
 
     /// Project the estimate onto what is physically possible: a leak
     /// coefficient not below its floor (a leak does not run backwards),
+    /// the healthy laminar leakage not below its floor,
     /// the piston within its end stops and not moving into them. The
     /// model has no end-stop force; this is it, as a constraint.
     #[inline(always)]
@@ -108,6 +109,7 @@ impl<T: Real, const N: usize> HypothesisFilter<T, N> {
         if let Some(i) = external_index(self.hypothesis) {
             x[i] = x[i].max(ctx.leak_floor[1]);
         }
+        x[LAMINAR] = x[LAMINAR].max(ctx.laminar_floor);
         if x[XP] < T::ZERO {
             x[XP] = T::ZERO;
             x[VP] = x[VP].max(T::ZERO);

@@ -125,6 +125,8 @@ pub struct StepContext<T> {
     /// filter's unit (l/min at 10 bar): minus the installation's healthy
     /// leakage, so that the total leak never flows backwards.
     pub leak_floor: [T; 2],
+    /// Lowest laminar-leakage deviation, in the filter's scaled unit.
+    pub laminar_floor: T,
     /// Stroke, in the scaled position unit: the end stops.
     pub stroke: T,
 }

@@ -62,6 +62,7 @@ fn at_point<T: Real>((u, s0): (f64, [f64; NX])) -> Setting<T> {
         learning: T::c(0.7),
         gain_learning: T::c(0.4),
         leak_floor: [T::c(-1.0), T::c(-1.0)],
+        laminar_floor: T::c(-2.0),
         // The dense reference has no end stops: keep them out of reach.
         stroke: T::c(1.0e3),
     };
@@ -334,4 +335,31 @@ fn non_finite_values_anywhere_are_caught_within_one_step() {
     non_finite_anywhere_fails_the_next_step::<f32, { NB + 1 }>(Hypothesis::External);
     non_finite_anywhere_fails_the_next_step::<f32, { NB + 2 }>(Hypothesis::Both);
     non_finite_anywhere_fails_the_next_step::<f64, { NB + 2 }>(Hypothesis::Both);
+}
+
+#[test]
+fn healthy_laminar_leakage_never_estimated_below_its_floor() {
+    // Readings that ask for ever less leakage across the edges and the
+    // seal (the chamber pressures drift apart, as a plant whose edges
+    // differ from the model's makes them): the estimate stops at the
+    // floor instead of running backwards.
+    let mut s = setting::<f64>(false);
+    s.ctx.laminar_floor = -0.5;
+    let p0 = [1e-3; NB];
+    let mut f: HypothesisFilter<f64, { NB + 2 }> =
+        HypothesisFilter::new(Hypothesis::Both, &s.s0, &p0, 0.1);
+    f.ekf.x[LAMINAR] = -0.45;
+    let mut lowest = f64::INFINITY;
+    for _ in 0..2000 {
+        let x = &f.ekf.x;
+        let m = Measurement {
+            z: [x[XP], x[P3] + 2e-3, x[P4] - 2e-3],
+            r: s.r,
+        };
+        let q = s.noise.variances(s.ctx.step.dt);
+        f.step(&s.plant, &s.ctx, &q, &m).expect("a filter step");
+        lowest = lowest.min(f.ekf.x[LAMINAR]);
+    }
+    assert!(lowest >= -0.5, "{lowest}");
+    assert_eq!(f.ekf.x[LAMINAR], -0.5, "the readings do push it down");
 }
