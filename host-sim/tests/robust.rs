@@ -157,6 +157,34 @@ fn an_open_valve_command_wire_is_a_sensor_fault_never_a_leak() {
 }
 
 #[test]
+fn an_open_valve_command_wire_during_slow_moves_is_a_sensor_fault_never_a_leak() {
+    // Closed-loop seed 31 moves at no more than 19 mm/s after 20 s (below
+    // the speed test): the still command and the travel must give it away.
+    let run = plant_run(
+        rig(4),
+        Scenario::ClosedLoop {
+            duration_s: 35.0,
+            seed: 31,
+        },
+        vec![Fault::OpenWire {
+            channel: Channel::UValve,
+            at_s: 20.0,
+        }],
+    );
+    let rows = plant::simulate(&run);
+    let vmax = rows
+        .iter()
+        .filter(|r| r.t >= 20.0)
+        .map(|r| r.truth.v_m_s.abs())
+        .fold(0.0, f64::max);
+    assert!(vmax < 0.02, "not a slow-motion run: {vmax} m/s");
+    let st = statuses(&run);
+    assert!(alarms(&st).is_empty(), "{:?}", alarms(&st));
+    assert!(st.iter().all(|s| !s.verdict.is_leak()));
+    assert_eq!(st.last().unwrap().verdict, Verdict::SensorFault);
+}
+
+#[test]
 fn stuck_or_nan_time_is_inconclusive_never_healthy() {
     for fault in [
         Fault::StuckTime {

@@ -20,6 +20,23 @@
 //! [`COMMAND_FAULT_S`] of contradiction the command channel is faulted.
 //! The contradiction drains ten times slower than it fills, so an open
 //! wire stays a fault through the holds between moves.
+//!
+//! **A command that sits still.** A slow move (5–20 mm/s) with the wire
+//! open is below that speed, and a calibrated null offset just outside
+//! the dead zone makes a reading of 0 look like a small opening; the
+//! filters then take the real valve flow for a leak. A live command
+//! moves with the controller's error; an open wire's reading does not
+//! change at all. So while the command stays within [`STILL_TOL`] of one
+//! value near zero (within [`STILL_BAND`]), the piston's net travel from
+//! where it stood when the command took that value is watched: beyond
+//! [`STILL_SUSPECT_M`] the command is contradicted, beyond
+//! [`STILL_FAULT_M`] faulted. Net travel, not time or speed: a hunting
+//! loop's command never sits still, and its piston swings about one
+//! place (no net travel); a valve closed by design sees at most the slow
+//! drift of a leak while the command is held (a leak of 1 l/min moves
+//! this piston 3 mm in 0.6 s: the price is that such drift with a
+//! constant zero command reads as a sensor fault, never as a leak from an
+//! untrusted command).
 
 use crate::real::Real;
 
@@ -50,6 +67,18 @@ pub const COMMAND_FAULT_S: f32 = 0.3;
 const COMMAND_DRAIN: f32 = 10.0;
 /// Contradiction time kept at most, s.
 const COMMAND_MEMORY_S: f32 = 2.0;
+/// A command within this of zero may be a dead input's reading (a live
+/// command this small moves the piston by at most millimetres per second).
+pub const STILL_BAND: f32 = 0.01;
+/// A command that changes by no more than this sits still (a live
+/// command changes with the controller's error from sample to sample).
+pub const STILL_TOL: f32 = 1.0e-5;
+/// Net travel with the command sitting still that contradicts it, m.
+pub const STILL_SUSPECT_M: f32 = 1.5e-3;
+/// Net travel with the command sitting still that faults it, m (the
+/// healthy development runs travel at most 0.9 mm with the command inside
+/// the dead zone).
+pub const STILL_FAULT_M: f32 = 3.0e-3;
 
 /// Verdict on one position reading.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -149,6 +178,10 @@ pub struct CommandAgreement {
     speed: f32,
     contradiction_s: f32,
     faulted: bool,
+    /// The command value that sits still, and the smoothed position when
+    /// it took that value, m.
+    still_u: f32,
+    still_x_m: f32,
 }
 
 impl CommandAgreement {
@@ -161,6 +194,8 @@ impl CommandAgreement {
             speed: 0.0,
             contradiction_s: 0.0,
             faulted: false,
+            still_u: f32::NAN,
+            still_x_m: 0.0,
         }
     }
 
@@ -184,13 +219,22 @@ impl CommandAgreement {
         let margin = self.dead_zone + DIRECTION_MARGIN;
         let against = (opening > margin && v < -CLOSED_SPEED_M_S)
             || (opening < -margin && v > CLOSED_SPEED_M_S);
-        let contradicted = closed || against;
+        // Net travel while the command sits still near zero (a NaN anchor
+        // never compares equal: the first sample re-anchors).
+        let xs = self.x_smooth.unwrap_or(x_m);
+        let still = (u - self.still_u).abs() <= STILL_TOL;
+        if u.abs() > STILL_BAND || !still {
+            self.still_u = u;
+            self.still_x_m = xs;
+        }
+        let travel = (xs - self.still_x_m).abs();
+        let contradicted = closed || against || travel > STILL_SUSPECT_M;
         if contradicted {
             self.contradiction_s = Real::min(self.contradiction_s + dt_s, COMMAND_MEMORY_S);
         } else {
             self.contradiction_s = Real::max(self.contradiction_s - dt_s / COMMAND_DRAIN, 0.0);
         }
-        if self.contradiction_s >= COMMAND_FAULT_S {
+        if self.contradiction_s >= COMMAND_FAULT_S || travel > STILL_FAULT_M {
             self.faulted = true;
         } else if self.contradiction_s <= 0.0 {
             self.faulted = false;
@@ -205,6 +249,7 @@ impl CommandAgreement {
     pub fn break_sequence(&mut self) {
         self.x_smooth = None;
         self.speed = 0.0;
+        self.still_u = f32::NAN;
     }
 }
 
@@ -278,6 +323,70 @@ mod tests {
             }
         }
         assert!(fault_at.is_some_and(|k| k < 1_500), "{fault_at:?}");
+    }
+
+    #[test]
+    fn a_slow_move_with_an_open_command_wire_is_a_fault_within_half_a_second() {
+        // A calibrated null offset just outside a narrow dead zone (as on
+        // development rig 3): a reading of 0 is a small opening, and the
+        // 8 mm/s move is below the speed test.
+        let mut c = CommandAgreement::new(0.002, -0.0173);
+        let mut rng = Lcg::new(7);
+        let (mut suspect_at, mut fault_at) = (None, None);
+        for k in 0..4_000 {
+            let t = k as f32 * 1e-3;
+            let x = 0.05 + 0.008 * (t - 1.0).max(0.0) + 5e-5 * rng.gaussian() as f32;
+            let r = c.check(x, 0.0, 1e-3);
+            if k < 1_000 {
+                assert!(!r.contradicted, "{k}");
+            }
+            if r.contradicted && suspect_at.is_none() {
+                suspect_at = Some(k);
+            }
+            if r.faulted && fault_at.is_none() {
+                fault_at = Some(k);
+            }
+        }
+        // 1.5 mm and 3 mm of travel at 8 mm/s, plus the smoothing.
+        assert!(suspect_at.is_some_and(|k| k < 1_250), "{suspect_at:?}");
+        assert!(fault_at.is_some_and(|k| k < 1_450), "{fault_at:?}");
+        // The piston stands still at its new place: the fault stays.
+        assert!(c.check(0.074, 0.0, 1e-3).faulted);
+    }
+
+    #[test]
+    fn a_slow_move_with_a_small_live_command_is_not_contradicted() {
+        // The controller's command during a slow move: small (inside the
+        // band), nearly steady, but live (it follows the error).
+        let mut c = CommandAgreement::new(0.015, 0.0);
+        let mut rng = Lcg::new(9);
+        for k in 0..6_000 {
+            let t = k as f32 * 1e-3;
+            let x = 0.05 + 0.009 * t;
+            let u = -0.0079 + 1e-4 * (t * 3.0).sin() + 2e-5 * rng.gaussian() as f32;
+            let r = c.check(x + 5e-5 * rng.gaussian() as f32, u, 1e-3);
+            assert!(!r.contradicted, "{k}");
+        }
+    }
+
+    #[test]
+    fn a_hunting_position_loop_is_not_a_fault() {
+        // The loop hunts at 20 Hz: the command swings ±0.1 about the dead
+        // zone and the piston, half a cycle behind, swings ±0.5 mm about
+        // its place (chamber pressures swinging with it).
+        let mut c = CommandAgreement::new(0.015, 0.0);
+        let mut rng = Lcg::new(11);
+        let w = 2.0 * core::f32::consts::PI * 20.0;
+        let mut contradicted = 0;
+        for k in 0..20_000 {
+            let t = k as f32 * 1e-3;
+            let u = 0.1 * (w * t).sin();
+            let x = 0.08 - 5e-4 * (w * t).sin() + 5e-5 * rng.gaussian() as f32;
+            let r = c.check(x, u, 1e-3);
+            assert!(!r.faulted, "{k}");
+            contradicted += r.contradicted as u32;
+        }
+        assert_eq!(contradicted, 0);
     }
 
     #[test]
