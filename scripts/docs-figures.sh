@@ -9,6 +9,11 @@
 #   scripts/docs-figures.sh eval size        only these
 #   REUSE=1 scripts/docs-figures.sh eval     rewrite from the outputs already in
 #                                            target/docs-figures/ (no rerun)
+#   EVAL_CACHE=DIR scripts/docs-figures.sh   the eval producers pass `--cache DIR`
+#                                            (the plant runs are simulated once;
+#                                            calibration and replay always rerun,
+#                                            and the report says how many came
+#                                            from the cache)
 #
 # Producers (outputs are kept in target/docs-figures/):
 #   examples    host-sim replay --json of examples/*.csv.gz      → README.md (seconds)
@@ -153,7 +158,7 @@ eval_block() {
   step "eval ($name): host-sim eval $*"
   if [ "$reuse" != 1 ] || [ ! -s "$out/eval-$name.md" ]; then
     build_host_sim
-    "$hs" eval "$@" --json "$out/eval-$name.json" -o "$out/eval-$name.md"
+    "$hs" eval "$@" ${EVAL_CACHE:+--cache "$EVAL_CACHE"} --json "$out/eval-$name.json" -o "$out/eval-$name.md"
   fi
   python3 - "$out/eval-$name.md" "$commit" "$*" <<'PY' > "$out/eval-$name.block.md"
 import re, sys
