@@ -291,6 +291,12 @@ fn calibration_bounds_the_laminar_leakage_where_the_installation_allows_it() {
         "{:?}",
         cal.warnings
     );
+    // The installation file keeps the relaxed bound (the rest of the
+    // filter tuning is the monitor version's).
+    let text = cal.to_toml("rig 6").unwrap();
+    let back: Params = toml::from_str(&text).unwrap();
+    assert_eq!(back.filter.laminar_factor_min, UNBOUNDED_LAMINAR_FACTOR);
+    assert_eq!(back.filter.q_laminar, start.filter.q_laminar);
     // Development rig 5 (100 bar, 25 °C) keeps the bound.
     let five = calibration_recording(5, 100.0, 25.0, 7213658928450607, 4719478531644651);
     let cal = calibrate(&five, &start).unwrap_or_else(|e| panic!("{e}"));

@@ -1,6 +1,7 @@
 //! The calibration's report, summary and TOML.
 
 use super::{Calibration, CalibrationError, MAX_VALIDATION_NIS};
+use monitor::Params;
 
 impl Calibration {
     /// The calibration if its parameters pass [`Params::validate`](monitor::Params::validate) (the
@@ -162,7 +163,16 @@ impl Calibration {
         }
         out += "\n";
         let mut table = toml::Table::try_from(&self.params)?;
+        // The filter tuning belongs to the monitor version, not to the
+        // installation; the one exception is a laminar bound calibration
+        // had to relax for this installation.
         table.remove("filter");
+        let laminar_min = self.params.filter.laminar_factor_min;
+        if laminar_min != Params::nominal().filter.laminar_factor_min {
+            let mut filter = toml::Table::new();
+            filter.insert("laminar_factor_min".into(), laminar_min.into());
+            table.insert("filter".into(), filter.into());
+        }
         out += &toml::to_string(&table)?;
         Ok(out)
     }
