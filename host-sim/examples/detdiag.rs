@@ -2,7 +2,7 @@
 //! file from its `--cache` with the cell's calibrated parameters (as
 //! `eval` did) and prints, per run, what the alarm looks at after the onset
 //! (from 2 s after it): the alarm level (the user's, raised to the cell's
-//! detection floor), the true flow, the mean evidence weight `w`, the
+//! lowest detection floor; a region's floor may be higher), the true flow, the mean evidence weight `w`, the
 //! w-weighted detection reading `det` and its 1σ `sd`, the w-weighted share
 //! of time the probability gate holds (`pgate`) and that `det − 2·sd`
 //! exceeds the alarm level (`lowOK`, an approximation of the CUSUM's
@@ -18,34 +18,27 @@
 //! per-10-sample CSV per run with the `both` filter's raw states;
 //! `DETDIAG_SET="filter.q_laminar=0;baseline.detection_floor_lpm=[0,0]"`
 //! overrides calibrated parameters (JSON values) for ablations.
-use host_sim::eval::exec::{recording_for, TextReader};
-use host_sim::eval::RunSpec;
-use monitor::{Monitor, Params};
+#[path = "common/eval_runs.rs"]
+mod eval_runs;
+
+use eval_runs::{replay_params, EvalRun, EvalRuns};
+use monitor::Monitor;
 
 fn main() -> anyhow::Result<()> {
-    let a: Vec<String> = std::env::args().collect();
-    let v: serde_json::Value = serde_json::from_slice(&std::fs::read(&a[1])?)?;
-    let cache = std::path::PathBuf::from(&a[2]);
-    let filters = &a[3..];
-    let cells = v["cells"].as_array().unwrap();
+    let runs = EvalRuns::from_args()?;
     let trace = std::env::var("DETDIAG_TRACE").ok();
     println!(
         "{:<46} {:>5} {:>5} {:>5} | {:>5} {:>5} | {:>5} {:>5} {:>5} {:>5} {:>5} {:>5} {:>5} | {:>5} {:>5}",
         "run", "alarm", "truth", "w", "det", "sd", "pgate", "lowOK", "both", "ekfI", "ekfE", "sdI", "sdE", "verd", "t_al"
     );
-    for r in v["runs"].as_array().unwrap() {
-        let spec: RunSpec = serde_json::from_value(r["spec"].clone())?;
-        if !spec.has_leak() && filters.is_empty() {
+    for EvalRun {
+        spec,
+        params: mut pv,
+    } in runs.runs()?
+    {
+        if !spec.has_leak() && !runs.filtered() {
             continue;
         }
-        if !filters.is_empty() && !filters.iter().any(|f| spec.id.contains(f.as_str())) {
-            continue;
-        }
-        let cell = cells
-            .iter()
-            .find(|c| c["cell"] == r["spec"]["cell"])
-            .unwrap();
-        let mut pv = cell["calibration"]["params"].clone();
         // DETDIAG_SET="filter.q_laminar=0;baseline.detection_floor_lpm=[0,0]"
         if let Ok(set) = std::env::var("DETDIAG_SET") {
             for kv in set.split(';').filter(|s| !s.is_empty()) {
@@ -57,15 +50,13 @@ fn main() -> anyhow::Result<()> {
                 *node = serde_json::from_str(val)?;
             }
         }
-        let mut params: Params = serde_json::from_value(pv)?;
-        params.filter.sample_period_s = 1.0 / spec.sample_rate_hz;
+        let params = replay_params(pv, &spec)?;
         let floor = params.baseline.detection_floor_lpm;
         let alarm = [
             params.alarm.alarm_lpm.max(floor[0]),
             params.alarm.alarm_lpm.max(floor[1]),
         ];
-        let (text, _) = recording_for(&spec, Some(&cache))?;
-        let mut rd = TextReader::new(&text[..])?;
+        let mut rd = runs.recording(&spec)?;
         let mut m: Monitor<f32> = Monitor::new(&params).map_err(|e| anyhow::anyhow!("{e}"))?;
         let onset = spec.leak.onset_s;
         let k = if spec.internal() { 0 } else { 1 };

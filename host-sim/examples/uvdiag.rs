@@ -13,36 +13,24 @@
 //! `CommandAgreement` (contradicted, faulted).
 //!
 //! `cargo run --release -p host-sim --example uvdiag -- RUNS.json CACHE [ID-SUBSTRING...]`
-use host_sim::eval::exec::{recording_for, TextReader};
-use host_sim::eval::RunSpec;
-use monitor::{Monitor, Params};
+#[path = "common/eval_runs.rs"]
+mod eval_runs;
+
+use eval_runs::{replay_params, EvalRun, EvalRuns};
+use monitor::Monitor;
 
 fn main() -> anyhow::Result<()> {
-    let a: Vec<String> = std::env::args().collect();
-    let v: serde_json::Value = serde_json::from_slice(&std::fs::read(&a[1])?)?;
-    let cache = std::path::PathBuf::from(&a[2]);
-    let filters = &a[3..];
-    let cells = v["cells"].as_array().unwrap();
+    let runs = EvalRuns::from_args()?;
     const D: [f32; 4] = [1e-3, 2e-3, 3e-3, 5e-3];
-    for r in v["runs"].as_array().unwrap() {
-        let spec: RunSpec = serde_json::from_value(r["spec"].clone())?;
-        if !filters.is_empty() && !filters.iter().any(|f| spec.id.contains(f.as_str())) {
-            continue;
-        }
+    for EvalRun { spec, params } in runs.runs()? {
         let uv = spec.id.contains("u_valve") || spec.id.contains("uvalve");
         if spec.fault.is_some() && !uv {
             continue;
         }
-        let cell = cells
-            .iter()
-            .find(|c| c["cell"] == r["spec"]["cell"])
-            .unwrap();
-        let mut params: Params = serde_json::from_value(cell["calibration"]["params"].clone())?;
-        params.filter.sample_period_s = 1.0 / spec.sample_rate_hz;
+        let params = replay_params(params, &spec)?;
         let dz = params.valve.dead_zone as f32;
         let null = params.valve.null_offset as f32;
-        let (text, _) = recording_for(&spec, Some(&cache))?;
-        let mut rd = TextReader::new(&text[..])?;
+        let mut rd = runs.recording(&spec)?;
         let mut m: Option<Monitor<f32>> = if uv {
             Some(Monitor::new(&params).map_err(|e| anyhow::anyhow!("{e}"))?)
         } else {
