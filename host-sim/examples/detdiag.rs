@@ -2,9 +2,10 @@
 //! file from its `--cache` with the cell's calibrated parameters (as
 //! `eval` did) and prints, per run, what the alarm looks at after the onset
 //! (from 2 s after it): the alarm level (the user's, raised to the cell's
-//! lowest detection floor; a region's floor may be higher), the true flow, the mean evidence weight `w`, the
-//! w-weighted detection reading `det` and its 1σ `sd`, the w-weighted share
-//! of time the probability gate holds (`pgate`) and that `det − 2·sd`
+//! lowest detection floor; a region's floor may be higher), the true
+//! flow, the mean evidence weight `w`, the w-weighted detection reading
+//! `det` and its 1σ `sd`, the w-weighted share of time the probability
+//! gate holds (`pgate`) and that `det − 2·sd`
 //! exceeds the alarm level (`lowOK`, an approximation of the CUSUM's
 //! input), the reported sizes and σ of both leaks, the final verdict and the
 //! first alarm's time after the onset. A second line gives the `both`
