@@ -8,6 +8,7 @@
 //! detection figures come from `host-sim eval`.
 
 use host_sim::eval::exec::row_sample;
+use host_sim::eval::plan::{plan, PlanConfig};
 use monitor::status::health;
 use monitor::{Event, Monitor, Params, Status, Verdict};
 use plant::{Channel, Fault, Leak, RigSpec, Run, Scenario};
@@ -249,27 +250,18 @@ fn noise_is_estimated_and_leak_flows_are_never_negative() {
 }
 
 /// The 60 s healthy recording `host-sim eval` calibrates development rig
-/// `seed` from (its seeds as the plan draws them).
-fn calibration_recording(
-    seed: u64,
-    supply_bar: f64,
-    temp_c: f64,
-    motion: u64,
-    noise: u64,
-) -> Vec<monitor::Sample> {
-    let run = Run {
-        rig: RigSpec::random(seed, supply_bar, temp_c),
-        scenario: Scenario::ClosedLoop {
-            duration_s: 60.0,
-            seed: motion,
-        },
-        leak: Leak::default(),
-        faults: Vec::new(),
-        temp_column: seed.is_multiple_of(2),
-        sample_rate_hz: 1000.0,
-        noise_seed: noise,
-    };
-    plant::simulate(&run).iter().map(row_sample).collect()
+/// `rig` at `supply_bar`, `temp_c` from (the full matrix's plan).
+fn calibration_recording(rig: u64, supply_bar: f64, temp_c: f64) -> Vec<monitor::Sample> {
+    let plan = plan(&PlanConfig::default());
+    let cell = plan
+        .cells
+        .iter()
+        .find(|c| c.cell.rig == rig && c.cell.supply_bar == supply_bar && c.cell.temp_c == temp_c)
+        .expect("a development cell");
+    plant::simulate(&cell.calibration.run())
+        .iter()
+        .map(row_sample)
+        .collect()
 }
 
 #[test]
@@ -280,7 +272,7 @@ fn calibration_bounds_the_laminar_leakage_where_the_installation_allows_it() {
     // Development rig 6 (100 bar, 40 °C): with the bound, the valve fit
     // is implausible and the calibration would be refused; without it,
     // the installation is described, and the report says so first.
-    let six = calibration_recording(6, 100.0, 40.0, 6690769000805646, 7552900874143786);
+    let six = calibration_recording(6, 100.0, 40.0);
     let cal = calibrate(&six, &start).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(
         cal.params.filter.laminar_factor_min,
@@ -298,7 +290,7 @@ fn calibration_bounds_the_laminar_leakage_where_the_installation_allows_it() {
     assert_eq!(back.filter.laminar_factor_min, UNBOUNDED_LAMINAR_FACTOR);
     assert_eq!(back.filter.q_laminar, start.filter.q_laminar);
     // Development rig 5 (100 bar, 25 °C) keeps the bound.
-    let five = calibration_recording(5, 100.0, 25.0, 7213658928450607, 4719478531644651);
+    let five = calibration_recording(5, 100.0, 25.0);
     let cal = calibrate(&five, &start).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(
         cal.params.filter.laminar_factor_min,
@@ -329,7 +321,7 @@ fn calibration_keeps_an_edge_asymmetry_only_where_it_lowers_the_healthy_readings
     use host_sim::calibrate::calibrate;
     // Development rig 1 (50 bar, 25 °C): 16 s at rest with the spool in
     // the dead zone, and edges that leak unevenly.
-    let one = calibration_recording(1, 50.0, 25.0, 4178594681922957, 74629024823236);
+    let one = calibration_recording(1, 50.0, 25.0);
     let cal = calibrate(&one, &Params::nominal()).unwrap_or_else(|e| panic!("{e}"));
     let fit = cal
         .fits
