@@ -130,9 +130,10 @@ pub(super) fn fit_plant(
     let mut warnings = Vec::new();
     let mut quality = Quality::default();
     let mut baseline_notes = Vec::new();
+    // The regressions' samples, for the valve, the load and the holds.
+    let d = fit::prepare_pieces(samples);
     match mechanics {
         Mechanics::Strict => {
-            let d = fit::prepare_pieces(samples);
             fit::fit_valve(&d, &mut p, &mut fits, &mut warnings, &mut quality);
             fit::fit_load(&d, &mut p, &mut fits, &mut quality);
             quality.problems.extend(quality_problems(&quality));
@@ -140,7 +141,6 @@ pub(super) fn fit_plant(
         Mechanics::Lenient => {
             // Each regression on its own: what is implausible is kept and
             // said, what fits well enough is used.
-            let d = fit::prepare_pieces(samples);
             let mut valve = p.clone();
             let mut q = Quality::default();
             let mut f = Vec::new();
@@ -208,10 +208,10 @@ pub(super) fn fit_plant(
     // kept only if the healthy detection readings (what sets the
     // detection floor) come out lower with it after steps 4–5.
     let mut cands = vec![("symmetric", p.clone(), None)];
-    let d = fit::prepare_pieces(samples);
+    let holds = fit::EdgeHolds::of(&d, &p);
     for (spool, name) in [(true, "fitted"), (false, "fitted without spool gain")] {
         let mut q = p.clone();
-        if let Some(f) = fit::fit_edge_leak(&d, &mut q, spool, &mut warnings) {
+        if let Some(f) = fit::fit_edge_leak(&holds, &mut q, spool, &mut warnings) {
             cands.push((name, q, Some(f)));
         }
     }

@@ -353,6 +353,65 @@ const MIN_HOLD_SPOOL_SPREAD: f64 = 5e-4;
 /// Largest edge asymmetry the fit may give (|skew| + gain·dead zone).
 const MAX_SKEW: f64 = 0.9;
 
+/// The hold samples the covered-edge asymmetry is fitted from: piston at
+/// rest, spool inside the dead zone, pressures steady. Per sample the
+/// spool position and the skews each chamber's continuity calls for,
+/// (x_v, s_a, s_b).
+pub struct EdgeHolds {
+    rows: Vec<(f64, f64, f64)>,
+    /// Time they cover, s.
+    hold_s: f64,
+}
+
+impl EdgeHolds {
+    /// The holds of `d` under `p`'s cylinder, valve and healthy leakage.
+    pub fn of(d: &Prepared, p: &Params) -> Self {
+        let c = &p.cylinder;
+        let v = &p.valve;
+        let k_edge = v.edge_leak_lpm_per_bar / LPM_PER_M3S / BAR;
+        let k_seal = p.leakage.seal_lpm_per_bar / LPM_PER_M3S / BAR;
+        let k_ext = p.leakage.external_lpm_per_bar / LPM_PER_M3S / BAR;
+        // Covered with a margin for the rounded corner of the opening.
+        let covered = v.dead_zone - 0.004;
+        let still = MIN_SPEED / 3.0;
+        let span = 6 * HALF_WINDOW;
+        let n = d.p2.len();
+        let mut rows = Vec::new();
+        if k_edge > 0.0 && covered > 0.0 {
+            for i in (span..n.saturating_sub(span)).step_by(STRIDE) {
+                let vals = [d.p2[i], d.p3[i], d.p4[i], d.p5[i], d.u[i], d.v[i]];
+                if !vals.iter().all(|x| x.is_finite()) {
+                    continue;
+                }
+                let xv = d.u[i] + v.null_offset;
+                let at_rest = [i - span, i, i + span]
+                    .iter()
+                    .all(|&j| d.v[j].abs() < still);
+                let steady = (d.p3[i + span] - d.p3[i - span])
+                    .abs()
+                    .max((d.p4[i + span] - d.p4[i - span]).abs())
+                    < 1.0;
+                let (p2, p3, p4, p5) = (d.p2[i] * BAR, d.p3[i] * BAR, d.p4[i] * BAR, d.p5[i] * BAR);
+                if !(at_rest && steady && xv.abs() < covered && p2 - p5 > 5.0 * BAR) {
+                    continue;
+                }
+                let ps = k_edge * (p2 - p5);
+                let seal = k_seal * (p3 - p4);
+                let sv = d.v[i];
+                // 0 = k·(p2 + p5 − 2p3) + k·s_a·(p2 − p5) − seal − A_p·v, B alike.
+                let sa = (seal + c.piston_area_m2 * sv - k_edge * (p2 + p5 - 2.0 * p3)) / ps;
+                let sb = (-seal + k_ext * (p4 - p5)
+                    - c.rod_side_area_m2 * sv
+                    - k_edge * (p2 + p5 - 2.0 * p4))
+                    / ps;
+                rows.push((xv, sa, sb));
+            }
+        }
+        let hold_s = rows.len() as f64 * d.stride_s;
+        Self { rows, hold_s }
+    }
+}
+
 /// Fit the covered edges' asymmetry from the holds: with the piston at
 /// rest and the spool inside the dead zone, chamber continuity is the
 /// land leakage alone, and where each chamber's pressure settles says how
@@ -364,53 +423,13 @@ const MAX_SKEW: f64 = 0.9;
 /// With `spool` false the gain is left at 0. Returns the fit's line, or
 /// `None` (and, with `spool`, a warning) when the holds are too short.
 pub fn fit_edge_leak(
-    d: &Prepared,
+    holds: &EdgeHolds,
     p: &mut Params,
     spool: bool,
     warnings: &mut Vec<String>,
 ) -> Option<Fit> {
-    let c = &p.cylinder;
+    let (rows, hold_s) = (&holds.rows, holds.hold_s);
     let v = &p.valve;
-    let k_edge = v.edge_leak_lpm_per_bar / LPM_PER_M3S / BAR;
-    let k_seal = p.leakage.seal_lpm_per_bar / LPM_PER_M3S / BAR;
-    let k_ext = p.leakage.external_lpm_per_bar / LPM_PER_M3S / BAR;
-    // Covered with a margin for the rounded corner of the opening.
-    let covered = v.dead_zone - 0.004;
-    let still = MIN_SPEED / 3.0;
-    let span = 6 * HALF_WINDOW;
-    let n = d.p2.len();
-    let mut rows = Vec::new();
-    if k_edge > 0.0 && covered > 0.0 {
-        for i in (span..n.saturating_sub(span)).step_by(STRIDE) {
-            let vals = [d.p2[i], d.p3[i], d.p4[i], d.p5[i], d.u[i], d.v[i]];
-            if !vals.iter().all(|x| x.is_finite()) {
-                continue;
-            }
-            let xv = d.u[i] + v.null_offset;
-            let at_rest = [i - span, i, i + span]
-                .iter()
-                .all(|&j| d.v[j].abs() < still);
-            let steady = (d.p3[i + span] - d.p3[i - span])
-                .abs()
-                .max((d.p4[i + span] - d.p4[i - span]).abs())
-                < 1.0;
-            let (p2, p3, p4, p5) = (d.p2[i] * BAR, d.p3[i] * BAR, d.p4[i] * BAR, d.p5[i] * BAR);
-            if !(at_rest && steady && xv.abs() < covered && p2 - p5 > 5.0 * BAR) {
-                continue;
-            }
-            let ps = k_edge * (p2 - p5);
-            let seal = k_seal * (p3 - p4);
-            let sv = d.v[i];
-            // 0 = k·(p2 + p5 − 2p3) + k·s_a·(p2 − p5) − seal − A_p·v, B alike.
-            let sa = (seal + c.piston_area_m2 * sv - k_edge * (p2 + p5 - 2.0 * p3)) / ps;
-            let sb = (-seal + k_ext * (p4 - p5)
-                - c.rod_side_area_m2 * sv
-                - k_edge * (p2 + p5 - 2.0 * p4))
-                / ps;
-            rows.push((xv, sa, sb));
-        }
-    }
-    let hold_s = rows.len() as f64 * d.stride_s;
     if hold_s < MIN_HOLD_S {
         if spool {
             warnings.push(format!(
