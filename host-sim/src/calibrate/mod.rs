@@ -18,9 +18,11 @@
 //!    noise as leaks (NIS ≈ 25 instead of 3, healthy leakage 5× too large).
 //! 1. **Valve**, from quasi-steady moves in each direction: chamber
 //!    continuity gives the metering flow of each edge from the piston
-//!    velocity; regressing flow/√Δp on the command gives the flow gain
-//!    (slope) and where the edge opens (intercept), hence the dead zone and
-//!    the null bias, and the rod-side/piston-side edge ratio.
+//!    velocity and the oil compressed while the chamber pressure still
+//!    moves (`fit::FLOWING`); regressing flow/√Δp on the command gives the
+//!    flow gain (slope) and where the edge opens (intercept), hence the
+//!    dead zone and the null bias (edges slightly before null: a zero-lap
+//!    valve), and the rod-side/piston-side edge ratio.
 //!    **Covered edges**, from the holds (piston at rest, spool inside the
 //!    dead zone): where each chamber's pressure settles gives how its two
 //!    covered edges divide the land leakage (`valve.edge_leak_skew_a`,
@@ -28,7 +30,8 @@
 //!    Kept only if steps 4–5 with it leave healthy detection readings at
 //!    least 5 % lower than with symmetric edges (one edge coefficient for
 //!    all four edges makes the filter's laminar state stand in for it).
-//! 2. **Load and friction**, from the force balance on the same samples:
+//! 2. **Load and friction**, from the force balance on the settled ones
+//!    among those samples (`fit::SETTLED`):
 //!    gravity scale (also taken as the moving-mass scale), Coulomb and
 //!    viscous friction.
 //! 3. **Oil**: the entrained-air fraction minimising the healthy filter's

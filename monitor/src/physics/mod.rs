@@ -1,7 +1,7 @@
 //! Physics pieces of the cylinder, valve and load, in SI units: what the
 //! model is built from and what calibration fits against.
 
-pub(crate) mod fluid;
+pub mod fluid;
 pub mod friction;
 pub mod load;
 pub mod units;

@@ -1,6 +1,6 @@
 //! The regressions' data: smoothed signals, quasi-steady samples, and what motion they hold.
 
-use super::{HALF_WINDOW, MIN_SPEED, STRIDE};
+use super::{Steadiness, FLOWING, HALF_WINDOW, MIN_SPEED, SETTLED, STRIDE};
 use monitor::Sample;
 
 /// Signals derived from a recording for the regressions.
@@ -11,9 +11,14 @@ pub struct Prepared {
     pub(super) p5: Vec<f64>,
     pub(super) x: Vec<f64>,
     pub(super) u: Vec<f64>,
-    /// Indices of quasi-steady moving samples.
+    /// Indices of quasi-steady moving samples ([`FLOWING`]): the valve's.
     pub steady: Vec<usize>,
+    /// The settled ones among them ([`SETTLED`]): the force balance's.
+    pub settled: Vec<usize>,
     pub(super) v: Vec<f64>,
+    /// Rates of the chamber pressures, bar/s (piston, rod).
+    pub(super) dp3: Vec<f64>,
+    pub(super) dp4: Vec<f64>,
     /// Time each steady sample stands for, s.
     pub stride_s: f64,
     /// Time at rest (smoothed speed below `MIN_SPEED`), s.
@@ -43,6 +48,7 @@ pub fn prepare_pieces(pieces: &[&[Sample]]) -> Prepared {
         let d = prepare(piece);
         let offset = all.p2.len();
         all.steady.extend(d.steady.iter().map(|i| i + offset));
+        all.settled.extend(d.settled.iter().map(|i| i + offset));
         for (to, from) in [
             (&mut all.p2, d.p2),
             (&mut all.p3, d.p3),
@@ -51,6 +57,8 @@ pub fn prepare_pieces(pieces: &[&[Sample]]) -> Prepared {
             (&mut all.x, d.x),
             (&mut all.u, d.u),
             (&mut all.v, d.v),
+            (&mut all.dp3, d.dp3),
+            (&mut all.dp4, d.dp4),
         ] {
             to.extend(from);
         }
@@ -81,30 +89,38 @@ pub fn prepare(samples: &[Sample]) -> Prepared {
     let n = samples.len();
     let mut v = vec![0.0; n];
     let mut a = vec![f64::NAN; n];
+    let (mut dp3, mut dp4) = (vec![0.0; n], vec![0.0; n]);
     for i in h..n.saturating_sub(h) {
-        v[i] = (x[i + h] - x[i - h]) / (t[i + h] - t[i - h]);
+        let dt = t[i + h] - t[i - h];
+        v[i] = (x[i + h] - x[i - h]) / dt;
+        dp3[i] = (p3[i + h] - p3[i - h]) / dt;
+        dp4[i] = (p4[i + h] - p4[i - h]) / dt;
     }
     for i in 2 * h..n.saturating_sub(2 * h) {
         a[i] = (v[i + h] - v[i - h]) / (t[i + h] - t[i - h]);
     }
-    let mut steady = Vec::new();
+    let (mut steady, mut settled) = (Vec::new(), Vec::new());
     let span = 6 * h;
     for i in (span..n.saturating_sub(span)).step_by(STRIDE) {
         let all_valid = [p2[i], p3[i], p4[i], p5[i], x[i], u[i]]
             .iter()
             .all(|v| v.is_finite());
-        if !all_valid || v[i].abs() < MIN_SPEED || !(a[i].abs() < 0.02) {
+        let same_direction =
+            v[i - span].signum() == v[i].signum() && v[i + span].signum() == v[i].signum();
+        if !all_valid || v[i].abs() < MIN_SPEED || !same_direction {
             continue;
         }
-        // Steady command and pressures over ±90 ms.
         let du = (u[i + span] - u[i - span]).abs();
         let dp = (p3[i + span] - p3[i - span])
             .abs()
             .max((p4[i + span] - p4[i - span]).abs());
-        let same_direction =
-            v[i - span].signum() == v[i].signum() && v[i + span].signum() == v[i].signum();
-        if du < 0.01 && dp < 1.0 && same_direction {
+        let within =
+            |lim: Steadiness| a[i].abs() < lim.accel && du < lim.command && dp < lim.pressure_bar;
+        if within(FLOWING) {
             steady.push(i);
+        }
+        if within(SETTLED) {
+            settled.push(i);
         }
     }
     let period = if n > 1 {
@@ -128,7 +144,10 @@ pub fn prepare(samples: &[Sample]) -> Prepared {
         x,
         u,
         steady,
+        settled,
         v,
+        dp3,
+        dp4,
         stride_s: STRIDE as f64 * period,
     }
 }

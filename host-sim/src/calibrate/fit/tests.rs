@@ -1,0 +1,94 @@
+//! The valve regression on exact synthetic samples.
+
+use super::*;
+
+/// Steady samples of a valve with flow gains `gain` × the nominal ones
+/// and its edges at the nominal dead zone and null, both chambers'
+/// pressures rising at `rate_bar_s` ≠ 0 (the piston speed is what continuity
+/// leaves of the metering flow after the oil's compression).
+fn samples(p: &Params, gain: f64, rate_bar_s: f64) -> Prepared {
+    let c = &p.cylinder;
+    let to_si = 1.0 / LPM_PER_M3S / BAR.sqrt();
+    let kv = [
+        gain * p.valve.flow_gain_extend_lpm_sqrt_bar * to_si,
+        gain * p.valve.flow_gain_retract_lpm_sqrt_bar * to_si,
+    ];
+    let edges = [
+        p.valve.dead_zone - p.valve.null_offset,
+        p.valve.dead_zone + p.valve.null_offset,
+    ];
+    let k_edge = p.valve.edge_leak_lpm_per_bar / LPM_PER_M3S / BAR;
+    let k_seal = p.leakage.seal_lpm_per_bar / LPM_PER_M3S / BAR;
+    let k_ext = p.leakage.external_lpm_per_bar / LPM_PER_M3S / BAR;
+    let delta = p.valve.laminar_dp_bar * BAR;
+    let g = |dp: f64| orifice(dp, delta, delta.sqrt()).0;
+    let stored = |vol: f64, pa: f64| vol / bulk_modulus_exact(&p.fluid, pa) * rate_bar_s * BAR;
+    let mut d = prepare(&[]);
+    for i in 0..400 {
+        let extend = i % 2 == 0;
+        let opening = 0.05 + 0.25 * (i / 2) as f64 / 200.0;
+        let x = 0.02 + 0.14 * (i / 2) as f64 / 200.0;
+        let (p2, p5) = (100.0 * BAR, 1.0 * BAR);
+        let (p3, p4) = if extend {
+            (55.0 * BAR, 30.0 * BAR)
+        } else {
+            (40.0 * BAR, 70.0 * BAR)
+        };
+        let seal = k_seal * (p3 - p4);
+        let store_a = stored(c.dead_volume_piston_m3 + c.piston_area_m2 * x, p3);
+        let store_b = stored(
+            c.dead_volume_rod_m3 + c.rod_side_area_m2 * (c.stroke_m - x),
+            p4,
+        );
+        // Metering flows into A and B (the rod-side edge at ratio 1).
+        let (u, q_a, q_b) = if extend {
+            let m = kv[0] * (opening - edges[0]);
+            (opening, m * g(p2 - p3), -m * g(p4 - p5))
+        } else {
+            let m = kv[1] * (opening - edges[1]);
+            (-opening, -m * g(p3 - p5), m * g(p2 - p4))
+        };
+        // Chamber A's continuity gives the speed; B's pressure rate is
+        // what B's continuity then needs (the same rate, up to the edges'
+        // small leakage: the test asserts on A's edge).
+        let v = (q_a - store_a - seal + k_edge * (p2 + p5 - 2.0 * p3)) / c.piston_area_m2;
+        let need_b =
+            q_b + c.rod_side_area_m2 * v + seal + k_edge * (p2 + p5 - 2.0 * p4) - k_ext * (p4 - p5);
+        let dp4 = rate_bar_s * need_b / store_b;
+        d.p2.push(p2 / BAR);
+        d.p3.push(p3 / BAR);
+        d.p4.push(p4 / BAR);
+        d.p5.push(p5 / BAR);
+        d.x.push(x);
+        d.u.push(u);
+        d.v.push(v);
+        d.dp3.push(rate_bar_s);
+        d.dp4.push(dp4);
+        d.steady.push(i);
+    }
+    d.stride_s = 0.005;
+    d
+}
+
+fn fitted_gain(d: &Prepared, start: &Params) -> f64 {
+    let (mut p, mut fits, mut warnings, mut q) =
+        (start.clone(), Vec::new(), Vec::new(), Quality::default());
+    fit_valve(d, &mut p, &mut fits, &mut warnings, &mut q);
+    assert!(q.problems.is_empty(), "{:?}", q.problems);
+    p.valve.flow_gain_extend_lpm_sqrt_bar / start.valve.flow_gain_extend_lpm_sqrt_bar
+}
+
+#[test]
+fn the_valve_fit_counts_the_oil_compressed_while_the_pressures_move() {
+    let p = Params::nominal();
+    // Pressures rising at 10 bar/s (FLOWING allows 2 bar in 180 ms).
+    let rising = samples(&p, 1.05, 10.0);
+    let corrected = fitted_gain(&rising, &p);
+    assert!((corrected - 1.05).abs() < 1e-4, "{corrected}");
+    // Read as steady flow, the same samples give another gain.
+    let mut as_steady = rising;
+    as_steady.dp3.iter_mut().for_each(|r| *r = 0.0);
+    as_steady.dp4.iter_mut().for_each(|r| *r = 0.0);
+    let uncorrected = fitted_gain(&as_steady, &p);
+    assert!((uncorrected - 1.05).abs() > 1e-3, "{uncorrected}");
+}
