@@ -11,6 +11,11 @@
 //! the estimator for any gain k (the bank scales gains by learning
 //! weights) and is written symmetrically, so P stays exactly symmetric.
 //!
+//! The updates read P by its upper triangle only (a ≤ b, and the
+//! diagonal): every update but the step's last writes only that triangle,
+//! and the last one mirrors it, so P is exactly symmetric again between
+//! steps ([`Ekf::update_state_weighted`]'s `MIRROR`).
+//!
 //! Finiteness is checked once per filter step ([`Ekf::check_finite`]), on
 //! the state and the diagonal of P only: see there why that suffices.
 
@@ -59,17 +64,17 @@ impl<T: Real, const N: usize> Ekf<T, N> {
         }
     }
 
-    /// Update with a direct reading `z` of state `j` with noise variance
-    /// `r`, in Joseph form. `index` names the measurement in errors.
+    /// Update with a direct reading `z` of state `J` with noise variance
+    /// `r`, in Joseph form, P left symmetric. `index` names the
+    /// measurement in errors.
     #[cfg(test)]
-    pub fn update_state(
+    pub fn update_state<const J: usize>(
         &mut self,
-        j: usize,
         z: T,
         r: T,
         index: u8,
     ) -> Result<ScalarUpdate<T>, EkfError> {
-        self.update_state_weighted(j, z, r, index, &[T::ONE; N])
+        self.update_state_weighted::<J, true>(z, r, index, &[T::ONE; N])
     }
 
     /// As [`Self::update_state`], with the gain of each state scaled by its
@@ -78,35 +83,45 @@ impl<T: Real, const N: usize> Ekf<T, N> {
     /// poorly). The Joseph form gives the exact covariance of the estimator
     /// for any gain, so P stays consistent with what the filter does.
     ///
+    /// Reads only P's upper triangle (a ≤ b) and writes it; with `MIRROR`
+    /// also the lower one, so that P is exactly symmetric afterwards.
+    /// Without, the lower triangle is left stale: for an update followed
+    /// in the same filter step by one that mirrors (one store less per
+    /// off-diagonal entry). The measured state `J` is a constant so that
+    /// the entries of its column (read from row J below the diagonal) are
+    /// at fixed offsets.
+    ///
     /// Fails only on the innovation variance; a non-finite state or
     /// covariance is left for [`Self::check_finite`] at the end of the
     /// filter step (a non-finite P_jj is reported as
     /// [`EkfError::NonFinite`] here already, being the cause).
-    pub fn update_state_weighted(
+    #[inline(never)]
+    pub fn update_state_weighted<const J: usize, const MIRROR: bool>(
         &mut self,
-        j: usize,
         z: T,
         r: T,
         index: u8,
         weights: &[T; N],
     ) -> Result<ScalarUpdate<T>, EkfError> {
-        let s = self.p[(j, j)] + r;
+        const { assert!(J < N) };
+        let s = self.p[(J, J)] + r;
         if !(s > T::ZERO && finite(s)) {
-            return Err(if self.p[(j, j)].is_finite() {
+            return Err(if self.p[(J, J)].is_finite() {
                 EkfError::InnovationCovariance { index }
             } else {
                 EkfError::NonFinite
             });
         }
-        let nu = z - self.x[j];
+        let nu = z - self.x[J];
         let inv_s = T::ONE / s;
-        // Column j of P before the update (= P·h) and the weighted gain.
-        let pj: [T; N] = core::array::from_fn(|i| self.p[(i, j)]);
+        // Column J of P before the update (= P·h), from the upper triangle,
+        // and the weighted gain.
+        let pj: [T; N] = core::array::from_fn(|i| upper(&self.p, i, J));
         let k: [T; N] = core::array::from_fn(|i| pj[i] * inv_s * weights[i]);
         for (xi, ki) in self.x.iter_mut().zip(&k) {
             *xi += *ki * nu;
         }
-        joseph_update(&mut self.p, &pj, &k, s);
+        joseph_update::<T, N, MIRROR>(&mut self.p, &pj, &k, s);
         Ok(ScalarUpdate {
             innovation: nu,
             variance: s,
@@ -137,6 +152,16 @@ impl<T: Real, const N: usize> Ekf<T, N> {
     }
 }
 
+/// P[a, b] from the upper triangle (P[b, a] below the diagonal).
+#[inline(always)]
+pub(crate) fn upper<T: Real, const N: usize>(p: &SMatrix<T, N, N>, a: usize, b: usize) -> T {
+    if a <= b {
+        p[(a, b)]
+    } else {
+        p[(b, a)]
+    }
+}
+
 /// Joseph-form covariance update for a reading of state j (h = e_j), gain
 /// `k`, innovation variance `s` = P_jj + r and `pj` = P·e_j before the
 /// update. Elementwise, valid for any gain:
@@ -144,16 +169,23 @@ impl<T: Real, const N: usize> Ekf<T, N> {
 ///                                  = P − k·pjᵀ − t·kᵀ,  t = pj − s·k,
 /// two multiply-adds per entry. (t is what the gain leaves of P·h: zero
 /// for a state that learns fully, (1 − w)·pj for one whose gain is
-/// weighted by w.) Only the upper triangle is computed and mirrored: P
-/// stays exactly symmetric.
+/// weighted by w.) Only the upper triangle is computed; `MIRROR` copies
+/// it into the lower one, so P is exactly symmetric.
 #[inline(always)]
-fn joseph_update<T: Real, const N: usize>(p: &mut SMatrix<T, N, N>, pj: &[T; N], k: &[T; N], s: T) {
+fn joseph_update<T: Real, const N: usize, const MIRROR: bool>(
+    p: &mut SMatrix<T, N, N>,
+    pj: &[T; N],
+    k: &[T; N],
+    s: T,
+) {
     let t: [T; N] = core::array::from_fn(|a| pj[a] - s * k[a]);
     for a in 0..N {
         for b in a..N {
             let v = p[(a, b)] - k[a] * pj[b] - t[a] * k[b];
             p[(a, b)] = v;
-            p[(b, a)] = v;
+            if MIRROR {
+                p[(b, a)] = v;
+            }
         }
     }
 }
@@ -257,8 +289,8 @@ mod tests {
         let r = [0.3, 0.2];
         let z = [1.4, -0.1];
         let mut f = Ekf { x: x0, p: p0 };
-        f.update_state(0, z[0], r[0], 0).unwrap();
-        f.update_state(1, z[1], r[1], 1).unwrap();
+        f.update_state::<0>(z[0], r[0], 0).unwrap();
+        f.update_state::<1>(z[1], r[1], 1).unwrap();
         // Batch: K = P Hᵀ (H P Hᵀ + R)⁻¹ with H = I.
         let s = p0 + Matrix2::new(r[0], 0.0, 0.0, r[1]);
         let k = p0 * s.try_inverse().unwrap();
@@ -278,7 +310,7 @@ mod tests {
             x: Vector2::new(0.0, 0.0),
             p: p0,
         };
-        f.update_state_weighted(0, 1.0, 0.5, 0, &[1.0, 0.0])
+        f.update_state_weighted::<0, true>(1.0, 0.5, 0, &[1.0, 0.0])
             .unwrap();
         assert_eq!(f.x[1], 0.0);
         let k = Vector2::new(2.0 / 2.5, 0.0);
@@ -294,20 +326,20 @@ mod tests {
     fn bad_innovation_covariance_is_an_error_not_a_panic() {
         let mut f = Ekf::<f32, 2>::new(Vector2::new(0.0, 0.0), &Vector2::new(1.0, 1.0));
         assert_eq!(
-            f.update_state(0, 1.0, -2.0, 0),
+            f.update_state::<0>(1.0, -2.0, 0),
             Err(EkfError::InnovationCovariance { index: 0 })
         );
         assert_eq!(
-            f.update_state(1, 1.0, f32::NAN, 1),
+            f.update_state::<1>(1.0, f32::NAN, 1),
             Err(EkfError::InnovationCovariance { index: 1 })
         );
         // An infinite reading makes the state non-finite: the step's check
         // reports it.
-        assert!(f.update_state(0, f32::INFINITY, 1.0, 2).is_ok());
+        assert!(f.update_state::<0>(f32::INFINITY, 1.0, 2).is_ok());
         assert_eq!(f.check_finite(), Err(EkfError::NonFinite));
         // A covariance that is already non-finite is the cause, and named so.
         let mut g = Ekf::<f32, 2>::new(Vector2::new(0.0, 0.0), &Vector2::new(f32::NAN, 1.0));
-        assert_eq!(g.update_state(0, 1.0, 1.0, 0), Err(EkfError::NonFinite));
+        assert_eq!(g.update_state::<0>(1.0, 1.0, 0), Err(EkfError::NonFinite));
     }
 
     #[test]
@@ -365,7 +397,12 @@ mod tests {
             let (z, r) = (T::c(rng.next()), T::c(1e-4 + rng.next().abs()));
             let mut fast = Ekf { x, p };
             let mut slow = fast.clone();
-            fast.update_state_weighted(j, z, r, 0, &w).unwrap();
+            match j {
+                0 => fast.update_state_weighted::<0, true>(z, r, 0, &w),
+                4 => fast.update_state_weighted::<4, true>(z, r, 0, &w),
+                _ => fast.update_state_weighted::<5, true>(z, r, 0, &w),
+            }
+            .unwrap();
             joseph_update_dense(&mut slow, j, z, r, &w);
             let scale = p.iter().fold(0.0f64, |m, v| m.max(v.abs().to_f64()));
             for i in 0..11 {
@@ -377,6 +414,51 @@ mod tests {
                 }
             }
             assert_eq!(fast.p, fast.p.transpose());
+        }
+    }
+
+    #[test]
+    fn updates_of_the_upper_triangle_then_a_mirror_equal_mirrored_updates() {
+        // The bank's sequence (x_p, p3, p4; the last one mirrors) leaves
+        // exactly the bits of three mirrored updates, whatever the lower
+        // triangle held before it.
+        let mut rng = TestRng(0x9e37_79b9_7f4a_7c15);
+        for _ in 0..50 {
+            let p = rng.spd::<f32, 11>();
+            let x = SVector::<f32, 11>::from_fn(|_, _| rng.next() as f32);
+            let w: [f32; 11] = core::array::from_fn(|i| if i < 6 { 1.0 } else { 0.3 });
+            let z: [f32; 3] = core::array::from_fn(|_| rng.next() as f32);
+            let mut mirrored = Ekf { x, p };
+            let mut upper_only = mirrored.clone();
+            mirrored
+                .update_state_weighted::<0, true>(z[0], 1e-3, 0, &w)
+                .unwrap();
+            mirrored
+                .update_state_weighted::<4, true>(z[1], 1e-3, 1, &w)
+                .unwrap();
+            mirrored
+                .update_state_weighted::<5, true>(z[2], 1e-3, 2, &w)
+                .unwrap();
+            for a in 0..11 {
+                for b in 0..a {
+                    upper_only.p[(a, b)] = f32::NAN;
+                }
+            }
+            upper_only
+                .update_state_weighted::<0, false>(z[0], 1e-3, 0, &w)
+                .unwrap();
+            upper_only
+                .update_state_weighted::<4, false>(z[1], 1e-3, 1, &w)
+                .unwrap();
+            upper_only
+                .update_state_weighted::<5, true>(z[2], 1e-3, 2, &w)
+                .unwrap();
+            for (a, b) in upper_only.x.iter().zip(&mirrored.x) {
+                assert_eq!(a.to_bits(), b.to_bits());
+            }
+            for (a, b) in upper_only.p.iter().zip(&mirrored.p) {
+                assert_eq!(a.to_bits(), b.to_bits());
+            }
         }
     }
 
@@ -395,7 +477,7 @@ mod tests {
             p: Matrix2::new(1.0, 0.999_99, 0.999_99, 1.0),
         };
         for _ in 0..1000 {
-            f.update_state(0, 0.0, 1e-9, 0).unwrap();
+            f.update_state::<0>(0.0, 1e-9, 0).unwrap();
             predict_covariance_dense(&mut f.p, &Matrix2::new(1.0, 1e-3, 0.0, 1.0), &[1e-9, 1e-9]);
         }
         assert_eq!(f.p[(0, 1)], f.p[(1, 0)]);

@@ -156,18 +156,21 @@ impl<T: Real, const N: usize> HypothesisFilter<T, N> {
         };
         // Three calls, not a loop over MEASURED: in a loop the compiler
         // inlined the update and carried P through it on the stack; as
-        // calls, one out-of-line update per filter size loads and stores
-        // each entry once with the column and gain in registers (measured:
-        // a third fewer instructions for the updates).
-        self.update_one(0, ctx, m, e, &weights, &mut inn)?;
-        self.update_one(1, ctx, m, e, &weights, &mut inn)?;
-        self.update_one(2, ctx, m, e, &weights, &mut inn)?;
+        // calls, one out-of-line update per filter size and reading loads
+        // and stores each entry once with the column and gain in registers
+        // (measured: a third fewer instructions for the updates). The
+        // first two write P's upper triangle only, the last one mirrors it
+        // (`Ekf::update_state_weighted`).
+        self.update_one::<XP, false>(0, ctx, m, e, &weights, &mut inn)?;
+        self.update_one::<P3, false>(1, ctx, m, e, &weights, &mut inn)?;
+        self.update_one::<P4, true>(2, ctx, m, e, &weights, &mut inn)?;
         Ok(inn)
     }
 
-    /// Scalar update with reading `k` of `m`.
+    /// Scalar update with reading `k` of `m`, of state `J` = `MEASURED[k]`;
+    /// `MIRROR` as in [`Ekf::update_state_weighted`].
     #[inline(always)]
-    fn update_one(
+    fn update_one<const J: usize, const MIRROR: bool>(
         &mut self,
         k: usize,
         ctx: &StepContext<T>,
@@ -176,16 +179,16 @@ impl<T: Real, const N: usize> HypothesisFilter<T, N> {
         weights: &[T; N],
         inn: &mut Innovations<T>,
     ) -> Result<(), EkfError> {
-        let j = MEASURED[k];
-        let lag = if j == XP {
+        debug_assert_eq!(MEASURED[k], J, "reading k measures state J");
+        let lag = if J == XP {
             T::ZERO
         } else {
-            ctx.pressure_lag_s * e.f[j]
+            ctx.pressure_lag_s * e.f[J]
         };
         let r = m.r[k] + lag * lag;
         let u = self
             .ekf
-            .update_state_weighted(j, m.z[k], r, k as u8, weights)?;
+            .update_state_weighted::<J, MIRROR>(m.z[k], r, k as u8, weights)?;
         let nu2 = u.innovation * u.innovation;
         inn.nis += nu2 / u.variance;
         inn.det *= u.variance;
