@@ -11,10 +11,12 @@
 //! the estimator for any gain k (the bank scales gains by learning
 //! weights) and is written symmetrically, so P stays exactly symmetric.
 //!
-//! The updates read P by its upper triangle only (a ≤ b, and the
-//! diagonal): every update but the step's last writes only that triangle,
-//! and the last one mirrors it, so P is exactly symmetric again between
-//! steps ([`Ekf::update_state_weighted`]'s `MIRROR`).
+//! Within a filter step, after the prediction, P is read by its upper
+//! triangle only (a ≤ b, and the diagonal): the prediction
+//! (`bank::Transition::predict_covariance`) and every update but the
+//! step's last write only that triangle, and the last update mirrors it,
+//! so P is exactly symmetric again between steps
+//! ([`Ekf::update_state_weighted`]'s `MIRROR`).
 //!
 //! Finiteness is checked once per filter step ([`Ekf::check_finite`]), on
 //! the state and the diagonal of P only: see there why that suffices.

@@ -144,15 +144,19 @@ impl<T: Real, const N: usize> Transition<T, N> {
     ///
     /// With Φ = [[A, B], [0, I]] (A: the 6 plant rows and columns),
     /// M = Φ_plant·P (6 × N) gives the plant–nuisance covariances directly,
-    /// M·Φ_plantᵀ the plant block (one triangle, mirrored: P stays exactly
-    /// symmetric), and the nuisance block keeps its values.
+    /// M·Φ_plantᵀ the plant block (one triangle), and the nuisance block
+    /// keeps its values. Reads the whole of P, which must be symmetric;
+    /// writes only its upper triangle (a ≤ b): the lower one is left
+    /// stale for the step's updates, which read the upper one, and the
+    /// last of which mirrors it (`Ekf::update_state_weighted`).
     pub fn predict_covariance(&self, p: &mut SMatrix<T, N, N>, q: &[T; MAX_STATES]) {
         const { assert!(N <= MAX_STATES) };
         // Column c of M (plant rows only), for every column c of P.
         let m: [[T; NX]; N] = core::array::from_fn(|c| self.plant_rows_times(p, c));
         for (c, column) in m.iter().enumerate().skip(NX) {
             for (a, &v) in column.iter().enumerate() {
-                set_symmetric(p, a, c, v);
+                // a < NX ≤ c: upper triangle.
+                p[(a, c)] = v;
             }
         }
         self.write_plant_block(p, &m);
@@ -178,22 +182,22 @@ impl<T: Real, const N: usize> Transition<T, N> {
     }
 
     /// The plant block of Φ·P·Φᵀ, (M·Φ_plantᵀ)[a, b] = Σ_k M[a, k]·Φ[b, k],
-    /// for a ≥ b, mirrored; `m` holds M by columns. The columns ẋ_p and
-    /// x_p are formed for every row first: column x_p is column x_p of M
-    /// plus `ratio` × column ẋ_p.
+    /// for a ≥ b, written to the upper triangle (P[b, a]); `m` holds M by
+    /// columns. The columns ẋ_p and x_p are formed for every row first:
+    /// column x_p is column x_p of M plus `ratio` × column ẋ_p.
     #[inline(always)]
     fn write_plant_block(&self, p: &mut SMatrix<T, N, N>, m: &[[T; NX]; N]) {
         let velocity: [T; NX] = core::array::from_fn(|a| self.row_dot(Row::Velocity, |k| m[k][a]));
         for a in 0..NX {
-            set_symmetric(p, a, XP, m[XP][a] + self.ratio * velocity[a]);
+            p[(XP, a)] = m[XP][a] + self.ratio * velocity[a];
             if a != XP {
-                set_symmetric(p, a, VP, velocity[a]);
+                p[(VP, a)] = velocity[a];
             }
         }
         for row in Row::AFTER_MECHANICS {
             let b = row.index();
             for a in b..NX {
-                set_symmetric(p, a, b, self.row_dot(row, |k| m[k][a]));
+                p[(b, a)] = self.row_dot(row, |k| m[k][a]);
             }
         }
     }
@@ -217,11 +221,4 @@ impl<T: Real, const N: usize> Transition<T, N> {
         }
         phi
     }
-}
-
-/// P[a, b] = P[b, a] = v.
-#[inline(always)]
-fn set_symmetric<T: Real, const N: usize>(p: &mut SMatrix<T, N, N>, a: usize, b: usize, v: T) {
-    p[(a, b)] = v;
-    p[(b, a)] = v;
 }
