@@ -2,8 +2,8 @@
 
 use super::transition::Transition;
 use super::{
-    external_index, internal_index, state_count, FilterOutput, Measurement, StepContext, GAIN_EXT,
-    GAIN_RET, LAMINAR, MAX_STATES, MEASURED, NB,
+    leak_indices, state_count, FilterOutput, Measurement, StepContext, GAIN_EXT, GAIN_RET, LAMINAR,
+    MAX_STATES, MEASURED, NB,
 };
 use crate::estimation::ekf::{Ekf, EkfError};
 use crate::estimation::model::{Eval, Leaks, Nuisance, Plant, NX, P3, P4, P_REF, VP, XP};
@@ -67,11 +67,19 @@ impl<T: Real, const N: usize> HypothesisFilter<T, N> {
         }
     }
 
+    /// State indices of the internal and external leak coefficients, if
+    /// the hypothesis has them ([`leak_indices`]).
+    #[inline(always)]
+    fn leak_indices(&self) -> (Option<usize>, Option<usize>) {
+        leak_indices::<N>(self.hypothesis)
+    }
+
     /// The leak coefficients in the current state.
     pub fn leaks(&self) -> Leaks<T> {
+        let (internal, external) = self.leak_indices();
         Leaks {
-            internal: internal_index(self.hypothesis).map_or(T::ZERO, |i| self.ekf.x[i]),
-            external: external_index(self.hypothesis).map_or(T::ZERO, |i| self.ekf.x[i]),
+            internal: internal.map_or(T::ZERO, |i| self.ekf.x[i]),
+            external: external.map_or(T::ZERO, |i| self.ekf.x[i]),
         }
     }
 
@@ -86,7 +94,7 @@ impl<T: Real, const N: usize> HypothesisFilter<T, N> {
         m: &Measurement<T>,
     ) -> Result<FilterOutput<T>, EkfError> {
         let e = self.predict_mean(plant, ctx);
-        let phi = Transition::new(&e, ctx.step.dt, &ctx.spool_dt, self.hypothesis);
+        let phi = Transition::new(&e, ctx.step.dt, &ctx.spool_dt, self.leak_indices());
         phi.predict_covariance(&mut self.ekf.p, q);
         let inn = self.update(ctx, m, &e)?;
         self.project(ctx);
@@ -102,11 +110,12 @@ impl<T: Real, const N: usize> HypothesisFilter<T, N> {
     /// model has no end-stop force; this is it, as a constraint.
     #[inline(always)]
     fn project(&mut self, ctx: &StepContext<T>) {
+        let (internal, external) = self.leak_indices();
         let x = &mut self.ekf.x;
-        if let Some(i) = internal_index(self.hypothesis) {
+        if let Some(i) = internal {
             x[i] = x[i].max(ctx.leak_floor[0]);
         }
-        if let Some(i) = external_index(self.hypothesis) {
+        if let Some(i) = external {
             x[i] = x[i].max(ctx.leak_floor[1]);
         }
         x[LAMINAR] = x[LAMINAR].max(ctx.laminar_floor);
@@ -208,8 +217,9 @@ impl<T: Real, const N: usize> HypothesisFilter<T, N> {
     /// The step's output.
     fn output(&self, ctx: &StepContext<T>, e: &Eval<T>, inn: &Innovations<T>) -> FilterOutput<T> {
         let gref = T::c(crate::estimation::model::GAIN_REF);
-        let (leak_internal, leak_internal_sd) = self.leak(internal_index(self.hypothesis));
-        let (leak_external, leak_external_sd) = self.leak(external_index(self.hypothesis));
+        let (internal, external) = self.leak_indices();
+        let (leak_internal, leak_internal_sd) = self.leak(internal);
+        let (leak_external, leak_external_sd) = self.leak(external);
         // Leak flow magnitude at the updated pressures: θ·|Δp| / 10 bar (a
         // seal leaks whichever way the pressure difference pushes; a
         // negative θ is an estimate below the healthy baseline).

@@ -61,6 +61,23 @@ pub const fn external_index(h: Hypothesis) -> Option<usize> {
 pub const fn state_count(h: Hypothesis) -> usize {
     NB + h.leaks().len() as usize
 }
+
+/// [`internal_index`] and [`external_index`] of hypothesis `h`, whose
+/// filter has `N` states. The state count alone decides them for the
+/// healthy (NB) and both (NB + 2) filters, so in those filters' code they
+/// are constants; only the two NB + 1 filters test their hypothesis.
+#[inline(always)]
+pub(crate) fn leak_indices<const N: usize>(h: Hypothesis) -> (Option<usize>, Option<usize>) {
+    debug_assert!(
+        state_count(h) == N,
+        "state size does not match the hypothesis"
+    );
+    match N {
+        NB => (None, None),
+        MAX_STATES => (Some(NB), Some(NB + 1)),
+        _ => (internal_index(h), external_index(h)),
+    }
+}
 const MEASURED: [usize; NZ] = [XP, P3, P4];
 
 /// One sample's measurements in scaled filter units (see `model`), with

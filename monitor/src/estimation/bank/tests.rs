@@ -217,7 +217,8 @@ fn prediction_matches_dense<T: Real, const N: usize>(h: Hypothesis, tol: f64) {
     for point in POINTS {
         let s = at_point::<T>(point);
         let e = eval_at(&s);
-        let phi = Transition::<T, N>::new(&e, s.ctx.step.dt, &s.ctx.spool_dt, h);
+        let leaks = leak_indices::<N>(h);
+        let phi = Transition::<T, N>::new(&e, s.ctx.step.dt, &s.ctx.spool_dt, leaks);
         let dense = dense_transition::<T, N>(h, &e, s.ctx.step.dt, &s.ctx.spool_dt);
         assert_eq!(phi.dense(), dense, "{h:?} at {point:?}");
         let q = s.noise.variances(s.ctx.step.dt);

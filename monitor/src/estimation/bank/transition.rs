@@ -1,8 +1,7 @@
 //! The sparse transition Jacobian Φ of one step and the covariance prediction with it.
 
-use super::{external_index, internal_index, GAIN_EXT, GAIN_RET, LAMINAR, MAX_STATES};
+use super::{GAIN_EXT, GAIN_RET, LAMINAR, MAX_STATES};
 use crate::estimation::model::{Eval, NX, P3, P4, VP, VV, V_REF, XP, XV, X_REF};
-use crate::hypothesis::Hypothesis;
 use crate::physics::valve::SpoolStep;
 use crate::real::Real;
 use nalgebra::SMatrix;
@@ -65,19 +64,24 @@ pub struct Transition<T, const N: usize> {
 }
 
 impl<T: Real, const N: usize> Transition<T, N> {
-    /// Φ over `dt` for `hypothesis`, linearised at the start of the step:
-    /// the explicit part of each row divided by (1 − dt·d) where the
-    /// scheme treats its diagonal `d` implicitly; the spool block from its
-    /// exact map; position from the updated velocity (symplectic Euler).
-    pub fn new(e: &Eval<T>, dt: T, spool: &SpoolStep<T>, hypothesis: Hypothesis) -> Self {
+    /// Φ over `dt` for a hypothesis with leak states `(internal,
+    /// external)` ([`leak_indices`](super::leak_indices)), linearised at
+    /// the start of the step: the explicit part of each row divided by
+    /// (1 − dt·d) where the scheme treats its diagonal `d` implicitly; the
+    /// spool block from its exact map; position from the updated velocity
+    /// (symplectic Euler).
+    pub fn new(
+        e: &Eval<T>,
+        dt: T,
+        spool: &SpoolStep<T>,
+        (li, le): (Option<usize>, Option<usize>),
+    ) -> Self {
         let j = &e.jac;
         let stiff = crate::estimation::model::stiff::<T>;
         let g = dt / (T::ONE - dt * stiff(j.v_v));
         let velocity = [g * j.v_x, T::ONE + g * j.v_v, g * j.v_p3, g * j.v_p4];
         let g3 = dt / (T::ONE - dt * stiff(j.p3_p3));
         let g4 = dt / (T::ONE - dt * stiff(j.p4_p4));
-        let li = internal_index(hypothesis);
-        let le = external_index(hypothesis);
         let p3 = core::array::from_fn(|c| match c {
             XP => g3 * j.p3_x,
             VP => g3 * j.p3_v,
