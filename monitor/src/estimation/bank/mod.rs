@@ -172,6 +172,13 @@ impl<T: Real> ProcessNoise<T> {
 
 /// Step `filter`, its output into `slot` (`None` if it failed: a singular
 /// or non-finite innovation covariance, or a non-finite state).
+///
+/// Never inlined: inlined into the monitor's step (as the compiler did
+/// with the healthy and both filters, each stepped once), the filter's
+/// covariance and the step's many temporaries lie beyond the 1 KiB reach
+/// of a floating-point load's offset, and every access needed an extra
+/// address instruction.
+#[inline(never)]
 fn step_into<T: Real, const N: usize>(
     filter: &mut HypothesisFilter<T, N>,
     plant: &Plant<T>,
