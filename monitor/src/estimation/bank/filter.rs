@@ -133,12 +133,14 @@ impl<T: Real, const N: usize> HypothesisFilter<T, N> {
     pub(super) fn predict_mean(&mut self, plant: &Plant<T>, ctx: &StepContext<T>) -> Eval<T> {
         let leaks = self.leaks();
         let nuis = self.nuisance();
-        let mut s: [T; NX] = core::array::from_fn(|i| self.ekf.x[i]);
-        let e = plant.advance(&mut s, &ctx.inputs, nuis, leaks, &ctx.step);
-        for (i, v) in s.iter().enumerate() {
-            self.ekf.x[i] = *v;
-        }
-        e
+        // The plant states are the first NX of x: advanced in place.
+        let (s, _) = self
+            .ekf
+            .x
+            .as_mut_slice()
+            .split_first_chunk_mut::<NX>()
+            .expect("every filter has the plant states");
+        plant.advance(s, &ctx.inputs, nuis, leaks, &ctx.step)
     }
 
     /// The three scalar updates (x_p, p3, p4): innovations, NIS and the
