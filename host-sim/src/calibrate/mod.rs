@@ -21,8 +21,8 @@
 //!    velocity and the oil compressed while the chamber pressure still
 //!    moves (`fit::FLOWING`); regressing flow/√Δp on the command gives the
 //!    flow gain (slope) and where the edge opens (intercept), hence the
-//!    dead zone and the null bias (edges slightly before null: a zero-lap
-//!    valve), and the rod-side/piston-side edge ratio.
+//!    dead zone (at least the null region, `fit::MIN_DEAD_ZONE`) and the
+//!    null bias, and the rod-side/piston-side edge ratio.
 //!    **Covered edges**, from the holds (piston at rest, spool inside the
 //!    dead zone): where each chamber's pressure settles gives how its two
 //!    covered edges divide the land leakage (`valve.edge_leak_skew_a`,
