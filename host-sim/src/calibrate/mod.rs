@@ -270,8 +270,8 @@ pub struct Calibration {
 /// Calibrate from a healthy recording, starting from `start`.
 ///
 /// When the recording does not determine the valve and the load (too few
-/// quasi-steady moves, or regressions too poor to trust), or the fitted
-/// ones fail the held-out validation, the calibration is *partial* (said first among the warnings): the valve and the load
+/// quasi-steady moves, or regressions too poor to trust) the calibration
+/// is *partial* (said first among the warnings): the valve and the load
 /// are each used if their regression passes the lenient limits
 /// ([`LENIENT_VALVE_R2`], [`LENIENT_VALVE_RESIDUAL`], a plausible load),
 /// else kept as in `start`; the rest — noise, healthy leakage, per-region
@@ -313,11 +313,9 @@ fn calibrate_mechanics(
     let moves = Motion::of(&fit::prepare(samples));
     let both_ways = moves.extend_s > 0.0 && moves.retract_s > 0.0;
     match calibrate_with(samples, start, Mechanics::Strict) {
-        Err(
-            e @ (CalibrationError::NotEnoughMotion { .. }
-            | CalibrationError::PoorFit { .. }
-            | CalibrationError::ValidationFailed { .. }),
-        ) if both_ways => {
+        Err(e @ (CalibrationError::NotEnoughMotion { .. } | CalibrationError::PoorFit { .. }))
+            if both_ways =>
+        {
             let why = e.to_string();
             let partial = calibrate_with(samples, start, Mechanics::Lenient)
                 .or_else(|_| calibrate_with(samples, start, Mechanics::Kept));
@@ -337,12 +335,6 @@ fn calibrate_mechanics(
                         why: why + &also,
                         report,
                     },
-                    CalibrationError::ValidationFailed { why, report } => {
-                        CalibrationError::ValidationFailed {
-                            why: why + &also,
-                            report,
-                        }
-                    }
                     other => other,
                 }
             })?;
