@@ -71,6 +71,7 @@ mod lsq;
 mod prepare;
 
 pub use lsq::{line_fit, ratio_fit, solve};
+use prepare::chamber_pressure_change;
 pub use prepare::{prepare, prepare_pieces, Motion, Prepared};
 
 /// Flow gain per edge, l/min/√bar, from m³/(s·√Pa).
@@ -105,6 +106,43 @@ impl Quality {
     }
 }
 
+/// Chamber continuity with the model's land, seal and rod-side leakage:
+/// what the metering edges must deliver into chambers A and B, m³/s.
+struct Continuity {
+    /// Land leakage per covered edge, seal and rod side → tank, m³/(s·Pa).
+    k_edge: f64,
+    k_seal: f64,
+    k_ext: f64,
+    /// Piston and rod-side areas, m².
+    a_p: f64,
+    a_r: f64,
+}
+
+impl Continuity {
+    fn of(p: &Params) -> Self {
+        let per_pa = |lpm_per_bar: f64| lpm_per_bar / LPM_PER_M3S / BAR;
+        Self {
+            k_edge: per_pa(p.valve.edge_leak_lpm_per_bar),
+            k_seal: per_pa(p.leakage.seal_lpm_per_bar),
+            k_ext: per_pa(p.leakage.external_lpm_per_bar),
+            a_p: p.cylinder.piston_area_m2,
+            a_r: p.cylinder.rod_side_area_m2,
+        }
+    }
+
+    /// Net flow the metering edges deliver into A and into B at supply,
+    /// chamber and tank pressures `p2`…`p5` (Pa) and piston speed `v`
+    /// (m/s), with `store` the flows compressing the oil in A and B.
+    fn metering(&self, [p2, p3, p4, p5]: [f64; 4], v: f64, store: [f64; 2]) -> [f64; 2] {
+        let seal = self.k_seal * (p3 - p4);
+        [
+            self.a_p * v + store[0] + seal - self.k_edge * (p2 + p5 - 2.0 * p3),
+            -self.a_r * v + store[1] - seal - self.k_edge * (p2 + p5 - 2.0 * p4)
+                + self.k_ext * (p4 - p5),
+        ]
+    }
+}
+
 /// Fit the valve's flow gains, edge ratios, dead zone and null.
 pub fn fit_valve(
     d: &Prepared,
@@ -114,9 +152,7 @@ pub fn fit_valve(
     q: &mut Quality,
 ) {
     let c = &p.cylinder;
-    let k_edge = p.valve.edge_leak_lpm_per_bar / LPM_PER_M3S / BAR;
-    let k_seal = p.leakage.seal_lpm_per_bar / LPM_PER_M3S / BAR;
-    let k_ext = p.leakage.external_lpm_per_bar / LPM_PER_M3S / BAR;
+    let flows = Continuity::of(p);
     let delta = p.valve.laminar_dp_bar * BAR;
     let g = |dp: f64| orifice(dp, delta, delta.sqrt()).0;
     // Flow stored by compressing the oil in a chamber of volume `vol`, m³,
@@ -129,14 +165,10 @@ pub fn fit_valve(
     for &i in &d.steady {
         let (p2, p3, p4, p5) = (d.p2[i] * BAR, d.p3[i] * BAR, d.p4[i] * BAR, d.p5[i] * BAR);
         let v = d.v[i];
-        let seal = k_seal * (p3 - p4);
         let x = d.x[i].clamp(0.0, c.stroke_m);
         let store_a = compress(vol_a0 + c.piston_area_m2 * x, p3, d.dp3[i]);
         let store_b = compress(vol_b0 + c.rod_side_area_m2 * (c.stroke_m - x), p4, d.dp4[i]);
-        // Metering flow into A and into B from continuity.
-        let q_a = c.piston_area_m2 * v + store_a + seal - k_edge * (p2 + p5 - 2.0 * p3);
-        let q_b = -c.rod_side_area_m2 * v + store_b - seal - k_edge * (p2 + p5 - 2.0 * p4)
-            + k_ext * (p4 - p5);
+        let [q_a, q_b] = flows.metering([p2, p3, p4, p5], v, [store_a, store_b]);
         let u = d.u[i];
         if v > 0.0 && p2 - p3 > 2.0 * BAR && p4 - p5 > 2.0 * BAR {
             ext_a.push((u, q_a / g(p2 - p3)));
@@ -431,18 +463,15 @@ pub struct EdgeHolds {
 impl EdgeHolds {
     /// The holds of `d` under `p`'s cylinder, valve and healthy leakage.
     pub fn of(d: &Prepared, p: &Params) -> Self {
-        let c = &p.cylinder;
         let v = &p.valve;
-        let k_edge = v.edge_leak_lpm_per_bar / LPM_PER_M3S / BAR;
-        let k_seal = p.leakage.seal_lpm_per_bar / LPM_PER_M3S / BAR;
-        let k_ext = p.leakage.external_lpm_per_bar / LPM_PER_M3S / BAR;
+        let flows = Continuity::of(p);
         // Covered with a margin for the rounded corner of the opening.
         let covered = v.dead_zone - 0.004;
         let still = MIN_SPEED / 3.0;
         let span = 6 * HALF_WINDOW;
         let n = d.p2.len();
         let mut rows = Vec::new();
-        if k_edge > 0.0 && covered > 0.0 {
+        if flows.k_edge > 0.0 && covered > 0.0 {
             for i in (span..n.saturating_sub(span)).step_by(STRIDE) {
                 let vals = [d.p2[i], d.p3[i], d.p4[i], d.p5[i], d.u[i], d.v[i]];
                 if !vals.iter().all(|x| x.is_finite()) {
@@ -452,24 +481,17 @@ impl EdgeHolds {
                 let at_rest = [i - span, i, i + span]
                     .iter()
                     .all(|&j| d.v[j].abs() < still);
-                let steady = (d.p3[i + span] - d.p3[i - span])
-                    .abs()
-                    .max((d.p4[i + span] - d.p4[i - span]).abs())
-                    < 1.0;
+                let steady = chamber_pressure_change(&d.p3, &d.p4, i, span) < SETTLED.pressure_bar;
                 let (p2, p3, p4, p5) = (d.p2[i] * BAR, d.p3[i] * BAR, d.p4[i] * BAR, d.p5[i] * BAR);
                 if !(at_rest && steady && xv.abs() < covered && p2 - p5 > 5.0 * BAR) {
                     continue;
                 }
-                let ps = k_edge * (p2 - p5);
-                let seal = k_seal * (p3 - p4);
-                let sv = d.v[i];
-                // 0 = k·(p2 + p5 − 2p3) + k·s_a·(p2 − p5) − seal − A_p·v, B alike.
-                let sa = (seal + c.piston_area_m2 * sv - k_edge * (p2 + p5 - 2.0 * p3)) / ps;
-                let sb = (-seal + k_ext * (p4 - p5)
-                    - c.rod_side_area_m2 * sv
-                    - k_edge * (p2 + p5 - 2.0 * p4))
-                    / ps;
-                rows.push((xv, sa, sb));
+                // At a hold the metering edges are covered: what continuity
+                // asks of them is the skewed part of the land leakage,
+                // k·s·(p2 − p5) per chamber.
+                let ps = flows.k_edge * (p2 - p5);
+                let [q_a, q_b] = flows.metering([p2, p3, p4, p5], d.v[i], [0.0; 2]);
+                rows.push((xv, q_a / ps, q_b / ps));
             }
         }
         let hold_s = rows.len() as f64 * d.stride_s;

@@ -111,9 +111,7 @@ pub fn prepare(samples: &[Sample]) -> Prepared {
             continue;
         }
         let du = (u[i + span] - u[i - span]).abs();
-        let dp = (p3[i + span] - p3[i - span])
-            .abs()
-            .max((p4[i + span] - p4[i - span]).abs());
+        let dp = chamber_pressure_change(&p3, &p4, i, span);
         let within =
             |lim: Steadiness| a[i].abs() < lim.accel && du < lim.command && dp < lim.pressure_bar;
         if within(FLOWING) {
@@ -150,6 +148,14 @@ pub fn prepare(samples: &[Sample]) -> Prepared {
         dp4,
         stride_s: STRIDE as f64 * period,
     }
+}
+
+/// The larger change of the two (smoothed) chamber pressures `p3`, `p4`
+/// from `span` samples before `i` to `span` after, bar.
+pub(super) fn chamber_pressure_change(p3: &[f64], p4: &[f64], i: usize, span: usize) -> f64 {
+    (p3[i + span] - p3[i - span])
+        .abs()
+        .max((p4[i + span] - p4[i - span]).abs())
 }
 
 /// What motion a recording holds, for the engineer and the refusal.
