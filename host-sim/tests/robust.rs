@@ -7,6 +7,7 @@
 //! not about how well an uncalibrated monitor fits a foreign load; the
 //! detection figures come from `host-sim eval`.
 
+use host_sim::calibrate::{calibrate, Calibration};
 use host_sim::eval::exec::row_sample;
 use host_sim::eval::plan::{plan, PlanConfig};
 use monitor::status::health;
@@ -249,31 +250,37 @@ fn noise_is_estimated_and_leak_flows_are_never_negative() {
     assert!((0.25..0.5).contains(&sigma), "piston chamber σ {sigma} bar");
 }
 
-/// The 60 s healthy recording `host-sim eval` calibrates development rig
-/// `rig` at `supply_bar`, `temp_c` from (the full matrix's plan).
-fn calibration_recording(rig: u64, supply_bar: f64, temp_c: f64) -> Vec<monitor::Sample> {
+/// Development rig `rig` at `supply_bar`, `temp_c` calibrated from the
+/// nominal parameters as `host-sim eval` does it: from the cell's 60 s
+/// healthy recording in the full matrix's plan.
+fn calibrated(rig: u64, supply_bar: f64, temp_c: f64) -> Calibration {
     let plan = plan(&PlanConfig::default());
     let cell = plan
         .cells
         .iter()
         .find(|c| c.cell.rig == rig && c.cell.supply_bar == supply_bar && c.cell.temp_c == temp_c)
         .expect("a development cell");
-    plant::simulate(&cell.calibration.run())
+    let samples: Vec<monitor::Sample> = plant::simulate(&cell.calibration.run())
         .iter()
         .map(row_sample)
-        .collect()
+        .collect();
+    calibrate(&samples, &Params::nominal()).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// Some warning of `cal` is `what`.
+fn assert_warns(cal: &Calibration, what: impl Fn(&str) -> bool) {
+    assert!(cal.warnings.iter().any(|w| what(w)), "{:?}", cal.warnings);
 }
 
 #[test]
 fn calibration_bounds_the_laminar_leakage_where_the_installation_allows_it() {
-    use host_sim::calibrate::{calibrate, UNBOUNDED_LAMINAR_FACTOR};
+    use host_sim::calibrate::UNBOUNDED_LAMINAR_FACTOR;
     let start = Params::nominal();
     assert!(start.filter.laminar_factor_min > 0.0);
     // Development rig 6 (100 bar, 40 °C): with the bound, the valve fit
     // is implausible and the calibration would be refused; without it,
     // the installation is described, and the report says so first.
-    let six = calibration_recording(6, 100.0, 40.0);
-    let cal = calibrate(&six, &start).unwrap_or_else(|e| panic!("{e}"));
+    let cal = calibrated(6, 100.0, 40.0);
     assert_eq!(
         cal.params.filter.laminar_factor_min,
         UNBOUNDED_LAMINAR_FACTOR
@@ -290,8 +297,7 @@ fn calibration_bounds_the_laminar_leakage_where_the_installation_allows_it() {
     assert_eq!(back.filter.laminar_factor_min, UNBOUNDED_LAMINAR_FACTOR);
     assert_eq!(back.filter.q_laminar, start.filter.q_laminar);
     // Development rig 4 (100 bar, 25 °C) keeps the bound.
-    let four = calibration_recording(4, 100.0, 25.0);
-    let cal = calibrate(&four, &start).unwrap_or_else(|e| panic!("{e}"));
+    let cal = calibrated(4, 100.0, 25.0);
     assert_eq!(
         cal.params.filter.laminar_factor_min,
         start.filter.laminar_factor_min
@@ -307,22 +313,16 @@ fn calibration_bounds_the_laminar_leakage_where_the_installation_allows_it() {
         ],
         [0.0; 3]
     );
-    assert!(
-        cal.warnings
-            .iter()
-            .any(|w| w.starts_with("covered valve edges kept symmetric")),
-        "{:?}",
-        cal.warnings
-    );
+    assert_warns(&cal, |w| {
+        w.starts_with("covered valve edges kept symmetric")
+    });
 }
 
 #[test]
 fn calibration_keeps_an_edge_asymmetry_only_where_it_lowers_the_healthy_readings() {
-    use host_sim::calibrate::calibrate;
     // Development rig 3 (50 bar, 25 °C): 1.4 s at rest with the spool in
     // the dead zone, and edges that leak unevenly.
-    let three = calibration_recording(3, 50.0, 25.0);
-    let cal = calibrate(&three, &Params::nominal()).unwrap_or_else(|e| panic!("{e}"));
+    let cal = calibrated(3, 50.0, 25.0);
     let fit = cal
         .fits
         .iter()
@@ -353,35 +353,26 @@ fn calibration_keeps_an_edge_asymmetry_only_where_it_lowers_the_healthy_readings
 
 #[test]
 fn a_valve_whose_edges_are_fitted_before_null_gets_the_null_region() {
-    use host_sim::calibrate::calibrate;
     // Development rig 5 (50 bar, 40 °C): its regressions put the metering
     // edges at u = +0.0045 and −0.0180, a dead zone of −0.007: the
     // overlapped edges' smooth opening reads as a slight underlap. The
     // model has none; calibration gives the smallest dead zone and says
     // so (it was refused as an implausible dead zone before).
-    let five = calibration_recording(5, 50.0, 40.0);
-    let cal = calibrate(&five, &Params::nominal()).unwrap_or_else(|e| panic!("{e}"));
+    let cal = calibrated(5, 50.0, 40.0);
     assert!(!cal.partial, "{:?}", cal.warnings);
     assert_eq!(cal.params.valve.dead_zone, 0.005);
-    assert!(
-        cal.warnings
-            .iter()
-            .any(|w| w.contains("taken as 0.005 (the null region")),
-        "{:?}",
-        cal.warnings
-    );
+    assert_warns(&cal, |w| w.contains("taken as 0.005 (the null region"));
 }
 #[test]
 fn an_installation_described_only_coarsely_is_calibrated_with_a_high_floor() {
-    use host_sim::calibrate::{calibrate, MAX_DETECTION_FLOOR_LPM};
+    use host_sim::calibrate::MAX_DETECTION_FLOOR_LPM;
     // Development rig 1 (50 bar, 40 °C): its valve does not fit the
     // model's (edge ratio 1.44), and with the reference valve the healthy
     // internal readings reach 1.4 l/min retracting and holding. That is
     // still a monitor for gross leaks, one that does not alarm falsely as
     // the nominal parameters do: the floor is raised, and calibrate says
     // so.
-    let one = calibration_recording(1, 50.0, 40.0);
-    let cal = calibrate(&one, &Params::nominal()).unwrap_or_else(|e| panic!("{e}"));
+    let cal = calibrated(1, 50.0, 40.0);
     let b = &cal.params.baseline;
     let highest = b
         .region_floor_internal_lpm
@@ -389,11 +380,5 @@ fn an_installation_described_only_coarsely_is_calibrated_with_a_high_floor() {
         .chain(&b.region_floor_external_lpm)
         .fold(0.0f64, |m, &f| m.max(f));
     assert!(highest > 2.0 && highest <= MAX_DETECTION_FLOOR_LPM, "{b:?}");
-    assert!(
-        cal.warnings
-            .iter()
-            .any(|w| w.starts_with("detection floor")),
-        "{:?}",
-        cal.warnings
-    );
+    assert_warns(&cal, |w| w.starts_with("detection floor"));
 }
