@@ -16,7 +16,9 @@
 //! (`bank::Transition::predict_covariance`) and every update but the
 //! step's last write only that triangle, and the last update mirrors it,
 //! so P is exactly symmetric again between steps
-//! ([`Ekf::update_state_weighted`]'s `MIRROR`).
+//! ([`Ekf::update_state_weighted`]'s `MIRROR`). A step that fails before
+//! its last update leaves the lower triangle stale, but the monitor then
+//! restarts that filter (`Monitor::step`), so it is never read.
 //!
 //! Finiteness is checked once per filter step ([`Ekf::check_finite`]), on
 //! the state and the diagonal of P only: see there why that suffices.
