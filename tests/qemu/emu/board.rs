@@ -27,6 +27,16 @@ const BLOCK_PERIOD: Duration = Duration::from_micros(firmware::app::SAMPLE_PERIO
 /// reader that falls this many blocks behind has lost data.
 const RING_BLOCKS: u64 = 2;
 
+/// How long the replay waits before its first block, at least: the
+/// tasks (estimator, supervisor) are spawned after the ADC started, and
+/// the acknowledge script's challenges are computed in between. The
+/// linked runs tie virtual time to the host's clock, so that start-up
+/// takes longer on a slower machine; with only the rest of the current
+/// millisecond, one CI machine saw the boot relay state written at the
+/// first block instead of before it, and the first watchdog feed 62 µs
+/// after its period.
+const START_LEAD: Duration = Duration::from_millis(10);
+
 /// The ADC, DMA and trigger timer: block `k` of the recording is complete
 /// at `t0 + k` ms, as TIM3-triggered scans fill a half of the DMA buffer
 /// every millisecond. Each channel's code sum is split over the scans
@@ -43,10 +53,10 @@ pub struct ReplayAdc {
 }
 
 impl ReplayAdc {
-    /// Start the conversions now: block 0 is complete at the next
-    /// millisecond boundary after one block period.
+    /// Start the conversions now: block 0 is complete on a millisecond
+    /// boundary [`START_LEAD`] after now.
     pub fn start(case: &'static EmuCase) -> Self {
-        let t0 = Instant::from_millis(Instant::now().as_millis() + 1);
+        let t0 = Instant::from_millis((Instant::now() + START_LEAD).as_millis() + 1);
         record::with(|l| l.t0 = Some(t0));
         Self {
             case,
