@@ -10,7 +10,8 @@
 //!   (e.g. written by `host-sim calibrate`; relative paths are taken from
 //!   the workspace root), it is validated with the monitor's own rules and
 //!   compiled in as `INSTALLATION`; otherwise the reference rig's nominal
-//!   parameters are. A bad file fails the build, naming file and field.
+//!   parameters are, as a provisional set (`Params::PROVISIONAL`: never
+//!   `healthy`, gross leaks only, until an installation set is uploaded). A bad file fails the build, naming file and field.
 //! - Acknowledge key: `LEAK_MONITOR_ACK_KEY` (32 hexadecimal digits, the
 //!   installation's 128-bit key, see `docs/acknowledge.md`) is compiled in
 //!   as `ACK_KEY`. Without it the public development key is, with a build
@@ -36,11 +37,13 @@ fn main() {
     let (params, mut code) = match std::env::var_os("LEAK_MONITOR_PARAMS").filter(|v| !v.is_empty())
     {
         None => (
-            monitor::Params::nominal(),
-            "/// The reference rig's parameters (no `LEAK_MONITOR_PARAMS` given).\n\
-             pub const INSTALLATION: Params = Params::NOMINAL;\n\
+            monitor::Params::provisional(),
+            "/// The reference rig's parameters as a provisional set (no\n\
+             /// `LEAK_MONITOR_PARAMS` given): never `healthy`, gross leaks only,\n\
+             /// until an installation set is uploaded.\n\
+             pub const INSTALLATION: Params = Params::PROVISIONAL;\n\
              /// Where the parameters came from.\n\
-             pub const INSTALLATION_SOURCE: &str = \"nominal\";\n"
+             pub const INSTALLATION_SOURCE: &str = \"provisional\";\n"
                 .to_string(),
         ),
         Some(path) => {

@@ -16,7 +16,7 @@
 #                                            from the cache)
 #
 # Producers (outputs are kept in target/docs-figures/):
-#   examples    host-sim replay --json of examples/*.csv.gz      → README.md (seconds)
+#   examples    host-sim replay --json of examples/*.csv.gz (their rig's set) → README.md (seconds)
 #   golden      host-sim golden write of the two golden cases,
 #               into target/ (the committed goldens are not touched) → docs/on-target-tests.md
 #   throughput  a simulated 300 s recording (plain CSV), replayed 3 times;
@@ -81,10 +81,10 @@ build_host_sim() {
 }
 
 fig_examples() {
-  step "examples: host-sim replay --json examples/*.csv.gz"
+  step "examples: host-sim replay --json --params examples/reference-rig.toml examples/*.csv.gz"
   if [ "$reuse" != 1 ] || [ ! -s "$out/examples.jsonl" ]; then
     build_host_sim
-    "$hs" replay --json examples/healthy.csv.gz examples/internal.csv.gz \
+    "$hs" replay --json --params examples/reference-rig.toml examples/healthy.csv.gz examples/internal.csv.gz \
       examples/external.csv.gz examples/both.csv.gz > "$out/examples.jsonl"
   fi
   python3 - "$out/examples.jsonl" <<'PY' > "$out/examples.block.md"
@@ -129,7 +129,7 @@ fig_throughput() {
     build_host_sim
     [ -s "$out/throughput.csv" ] || "$hs" simulate -o "$out/throughput.csv" --duration 300
     for _ in 1 2 3; do
-      "$hs" replay "$out/throughput.csv" | sed -n 's/^throughput *\([0-9]*\) samples\/s/\1/p'
+      "$hs" replay --params examples/reference-rig.toml "$out/throughput.csv" | sed -n 's/^throughput *\([0-9]*\) samples\/s/\1/p'
     done > "$out/throughput.txt"
   fi
   cpu=$(sed -n 's/^model name[[:space:]]*: //p' /proc/cpuinfo 2>/dev/null | head -1)

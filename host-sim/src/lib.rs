@@ -37,6 +37,14 @@ pub fn load_params_or_nominal(path: Option<&Path>) -> anyhow::Result<Params> {
     path.map_or_else(|| Ok(Params::nominal()), load_params)
 }
 
+/// The parameters in `path` (see [`load_params`]), or the reference rig's
+/// as a provisional set ([`Params::PROVISIONAL`]): a recording of an
+/// installation nobody calibrated is monitored for gross leaks only and
+/// never called `healthy`.
+pub fn load_params_or_provisional(path: Option<&Path>) -> anyhow::Result<Params> {
+    path.map_or_else(|| Ok(Params::provisional()), load_params)
+}
+
 /// Largest parameter file read, bytes (a real one is a few KB).
 pub const MAX_PARAMS_BYTES: u64 = 1 << 20;
 

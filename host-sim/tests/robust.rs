@@ -38,7 +38,12 @@ fn plant_run(rig: RigSpec, scenario: Scenario, faults: Vec<Fault>) -> Run {
 
 /// Every status of the nominal f32 monitor over the run.
 fn statuses(run: &Run) -> Vec<Status> {
-    let mut m = Monitor::<f32>::new(&Params::nominal()).expect("nominal parameters");
+    statuses_with(run, &Params::nominal())
+}
+
+/// Every status of the f32 monitor with `params` over the run.
+fn statuses_with(run: &Run, params: &Params) -> Vec<Status> {
+    let mut m = Monitor::<f32>::new(params).expect("valid parameters");
     plant::simulate(run)
         .iter()
         .map(|row| m.step(&row_sample(row)))
@@ -381,4 +386,36 @@ fn an_installation_described_only_coarsely_is_calibrated_with_a_high_floor() {
         .fold(0.0f64, |m, &f| m.max(f));
     assert!(highest > 2.0 && highest <= MAX_DETECTION_FLOOR_LPM, "{b:?}");
     assert_warns(&cal, |w| w.starts_with("detection floor"));
+}
+
+#[test]
+fn an_installation_nobody_calibrated_is_never_healthy_and_alarms_on_gross_leaks_only() {
+    // A rig the reference parameters do not describe, run with them as
+    // the provisional set (a new board, or `replay` without `--params`).
+    let provisional = Params::provisional();
+    let gross = provisional.baseline.provisional_floor_lpm;
+    let healthy = statuses_with(&plant_run(rig(4), closed_loop(40.0), vec![]), &provisional);
+    assert!(alarms(&healthy).is_empty(), "{:?}", alarms(&healthy));
+    assert!(healthy.iter().all(|s| s.verdict == Verdict::Inconclusive));
+    assert!(healthy[20_000..]
+        .iter()
+        .all(|s| s.health & health::PROVISIONAL != 0));
+    // A leak well below the gross level: no alarm, no claim.
+    let mut run = plant_run(rig(4), closed_loop(40.0), vec![]);
+    run.leak = Leak {
+        internal_lpm: 0.5,
+        external_lpm: 0.0,
+        onset_s: 10.0,
+    };
+    assert!(alarms(&statuses_with(&run, &provisional)).is_empty());
+    // A gross one alarms.
+    run.leak.internal_lpm = 1.5 * gross;
+    let st = statuses_with(&run, &provisional);
+    let raised = alarms(&st);
+    assert!(
+        raised
+            .first()
+            .is_some_and(|&(t, v)| t > 10.0 && matches!(v, Verdict::Internal | Verdict::Both)),
+        "{raised:?}"
+    );
 }

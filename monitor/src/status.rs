@@ -116,6 +116,10 @@ pub mod health {
     /// verdict is `inconclusive` (relay off) instead of `healthy` until the
     /// monitor has concluded healthy for `acknowledge::EVIDENCE_MS`.
     pub const ACK_EVIDENCE: u16 = 1 << 11;
+    /// The parameter set is provisional, not calibrated for this
+    /// installation: never `healthy`, and only gross leaks alarm
+    /// (`baseline.provisional_floor_lpm`).
+    pub const PROVISIONAL: u16 = 1 << 12;
 }
 
 /// Something that happened at this sample.

@@ -17,6 +17,11 @@ pub(super) fn calibrate_with(
     mechanics: Mechanics,
 ) -> Result<Calibration, CalibrationError> {
     start.validate().map_err(CalibrationError::Params)?;
+    // What calibration fits and writes describes this installation: it is
+    // not provisional, whatever set it started from.
+    let mut own = start.clone();
+    own.baseline.provisional_floor_lpm = 0.0;
+    let start = &own;
     let (t0, duration) = match (samples.first(), samples.last()) {
         (Some(a), Some(b)) => (a.t_s, b.t_s - a.t_s),
         _ => (0.0, 0.0),

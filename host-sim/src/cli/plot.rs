@@ -17,14 +17,16 @@ pub struct Args {
     #[arg(short, long)]
     output: Option<PathBuf>,
     /// Installation parameters (TOML, e.g. from `calibrate`; `-` reads
-    /// standard input).
+    /// standard input). Without them, the reference rig's as a
+    /// provisional set: only gross leaks alarm, never `healthy`
+    /// (`examples/reference-rig.toml` is the examples' own set).
     #[arg(long)]
     params: Option<PathBuf>,
 }
 
 pub fn run(a: Args) -> Result<ExitCode> {
     host_sim::stdin_used_once(a.params.as_deref(), [a.recording.as_path()])?;
-    let params = host_sim::load_params_or_nominal(a.params.as_deref())?;
+    let params = host_sim::load_params_or_provisional(a.params.as_deref())?;
     let output = a.output.unwrap_or_else(|| default_plot_path(&a.recording));
     let reader = RecordingReader::open(&a.recording)?;
     let mut obs = host_sim::plot::PlotObserver::new(host_sim::plot::MAX_POINTS);

@@ -18,7 +18,9 @@ pub struct Args {
     #[arg(required = true)]
     recordings: Vec<PathBuf>,
     /// Installation parameters (TOML, e.g. from `calibrate`; `-` reads
-    /// standard input).
+    /// standard input). Without them, the reference rig's as a
+    /// provisional set: only gross leaks alarm, never `healthy`
+    /// (`examples/reference-rig.toml` is the examples' own set).
     #[arg(long)]
     params: Option<PathBuf>,
     /// Print exactly one JSON object per recording (`docs/cli.md`).
@@ -40,7 +42,7 @@ pub fn run(a: Args) -> Result<ExitCode> {
         a.params.as_deref(),
         a.recordings.iter().map(PathBuf::as_path),
     )?;
-    let params = host_sim::load_params_or_nominal(a.params.as_deref())?;
+    let params = host_sim::load_params_or_provisional(a.params.as_deref())?;
     anyhow::ensure!(
         a.trace.is_none() || a.recordings.len() == 1,
         "--trace takes a single recording"

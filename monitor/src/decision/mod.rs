@@ -122,6 +122,11 @@ pub struct Decision<T> {
     latch: Latch,
     warning: bool,
     mismatch: bool,
+    /// The parameter set was not calibrated for this installation: never
+    /// conclusive ([`Baseline::provisional_floor_lpm`]).
+    ///
+    /// [`Baseline::provisional_floor_lpm`]: crate::params::Baseline::provisional_floor_lpm
+    provisional: bool,
     /// Alarm and warning levels per leak and operating region
     /// (retracting, holding, extending), l/min: the user's levels, raised
     /// to the installation's detection floor there.
@@ -160,9 +165,13 @@ impl<T: Real> Decision<T> {
         let [floor_internal, floor_external] = b.detection_floor_lpm;
         // Per leak and region: the larger of the floor everywhere and the
         // region's.
+        // A provisional set's gross level is a floor everywhere.
+        let gross = b.provisional_floor_lpm;
         let floor = PerLeak::new(
-            b.region_floor_internal_lpm.map(|f| f.max(floor_internal)),
-            b.region_floor_external_lpm.map(|f| f.max(floor_external)),
+            b.region_floor_internal_lpm
+                .map(|f| f.max(floor_internal).max(gross)),
+            b.region_floor_external_lpm
+                .map(|f| f.max(floor_external).max(gross)),
         );
         let a = &params.alarm;
         Self {
@@ -184,6 +193,7 @@ impl<T: Real> Decision<T> {
             latch: Latch::new(),
             warning: false,
             mismatch: false,
+            provisional: params.is_provisional(),
             alarm_lpm: floor.map(|f| f.map(|f| T::c(a.alarm_lpm.max(f)))),
             // The warning keeps its ratio to the alarm level.
             warning_lpm: floor
@@ -229,11 +239,13 @@ impl<T: Real> Decision<T> {
     }
 
     /// Has the monitor evaluated enough valid evidence to claim healthy?
+    /// Never with a provisional parameter set.
     pub fn conclusive(&self) -> bool {
         self.evidence_s >= self.min_evidence_s
             && self.recent_weight >= self.min_evidence_fraction * self.recent_time
             && self.reset_hold_s <= T::ZERO
             && !self.mismatch
+            && !self.provisional
     }
 
     /// An operator's acknowledgement at `t_ms` (sample time): the latch
@@ -430,6 +442,9 @@ impl<T: Real> Decision<T> {
         if self.mismatch {
             f |= health::MODEL_MISMATCH;
         }
+        if self.provisional {
+            f |= health::PROVISIONAL;
+        }
         f
     }
 
@@ -546,5 +561,49 @@ mod tests {
         assert!(time_to_alarm(&p, 1.5, 2).is_some());
         // The floor everywhere still applies where a region's is lower.
         assert_eq!(time_to_alarm(&p, 0.09, 0), None);
+    }
+
+    #[test]
+    fn a_provisional_set_is_never_conclusive_and_alarms_on_gross_leaks_only() {
+        let p = Params::provisional();
+        let gross = p.baseline.provisional_floor_lpm;
+        assert!(gross > 1.0, "{gross}");
+        // A healthy reading, evidence in every sample for 10 s.
+        let mut d: Decision<f64> = Decision::new(&p);
+        let mut events = Events::new();
+        for i in 0..10_000 {
+            d.update(
+                &outputs(0.0),
+                0.001,
+                1.0,
+                true,
+                1,
+                i as f64 * 0.001,
+                &mut events,
+            );
+        }
+        assert!(!d.conclusive());
+        assert_ne!(d.flags() & health::PROVISIONAL, 0);
+        // The same evidence with the calibrated set concludes.
+        let mut d: Decision<f64> = Decision::new(&Params::nominal());
+        for i in 0..10_000 {
+            d.update(
+                &outputs(0.0),
+                0.001,
+                1.0,
+                true,
+                1,
+                i as f64 * 0.001,
+                &mut events,
+            );
+        }
+        assert!(d.conclusive());
+        assert_eq!(d.flags() & health::PROVISIONAL, 0);
+        // Leaks: the calibrated set's level no longer alarms, a gross one
+        // does, in every region.
+        for region in 0..3 {
+            assert_eq!(time_to_alarm(&p, 0.9 * gross, region), None);
+            assert!(time_to_alarm(&p, 1.5 * gross, region).is_some());
+        }
     }
 }

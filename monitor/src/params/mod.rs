@@ -302,6 +302,17 @@ params_struct! {
         /// The same for the external leak, l/min.
         pub region_floor_external_lpm: [f64; 3] = [0.0; 3],
             in (0.0 ..= 10.0, "l/min"),
+        /// A provisional set's gross leak level, l/min. A set that was not
+        /// calibrated for this installation (the compiled-in reference
+        /// rig's on a new machine, or the fallback after calibration
+        /// refused) cannot back a `healthy` claim: the model error of an
+        /// unknown installation reads as leaks of up to about this size.
+        /// Above 0 the verdict is never `healthy` (`inconclusive`, flag
+        /// `provisional`) and a leak alarms only above this level, so that
+        /// a gross leak is still caught. 0: the set describes this
+        /// installation (`calibrate` writes 0).
+        pub provisional_floor_lpm: f64 = 0.0,
+            in (0.0 ..= 10.0, "l/min"),
     }
 }
 
@@ -489,6 +500,13 @@ params_struct! {
     }
 }
 
+/// The gross leak level of [`Params::PROVISIONAL`], l/min: the largest
+/// leak reading of the development rigs' leak-free runs with the reference
+/// rig's values uncalibrated (2.9 l/min, `host-sim eval --set dev
+/// --no-calibration`) times the calibration's floor margin of 1.5, rounded
+/// up (see `docs/calibration.md`, "Without a calibration").
+pub const PROVISIONAL_FLOOR_LPM: f64 = 5.0;
+
 /// Everything the monitor needs to know about one installation.
 #[derive(Clone, Debug, PartialEq, Default)]
 #[cfg_attr(feature = "serde", derive(Serialize, Deserialize))]
@@ -565,6 +583,38 @@ impl Params {
     /// The reference thesis rig (ch. 5–6).
     pub fn nominal() -> Self {
         Self::NOMINAL
+    }
+
+    /// The reference rig's values as a provisional set for an installation
+    /// that has not been calibrated (see
+    /// [`Baseline::provisional_floor_lpm`]): what the firmware runs when
+    /// no installation set was compiled in or stored, and `host-sim
+    /// replay` without `--params`.
+    pub const PROVISIONAL: Params = Params {
+        baseline: Baseline {
+            provisional_floor_lpm: PROVISIONAL_FLOOR_LPM,
+            ..Baseline::NOMINAL
+        },
+        ..Self::NOMINAL
+    };
+
+    /// [`Self::PROVISIONAL`].
+    pub fn provisional() -> Self {
+        Self::PROVISIONAL
+    }
+
+    /// This set as a provisional one (its gross level at least
+    /// [`PROVISIONAL_FLOOR_LPM`]): for an installation it was not
+    /// calibrated for.
+    pub fn into_provisional(mut self) -> Self {
+        let b = &mut self.baseline;
+        b.provisional_floor_lpm = b.provisional_floor_lpm.max(PROVISIONAL_FLOOR_LPM);
+        self
+    }
+
+    /// Whether this set was not calibrated for its installation.
+    pub fn is_provisional(&self) -> bool {
+        self.baseline.provisional_floor_lpm > 0.0
     }
 
     /// The bounds table: every section's fields with their physical

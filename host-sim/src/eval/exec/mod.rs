@@ -47,8 +47,9 @@ pub const SIZE_SPAN_S: f64 = 4.0;
 /// How to execute a plan.
 #[derive(Clone, Debug)]
 pub struct ExecConfig {
-    /// Parameters to calibrate from (and to use where calibration is
-    /// refused or off): the reference rig's unless given.
+    /// Parameters to calibrate from (and to use where calibration is off;
+    /// where it is refused, as a provisional set): the reference rig's
+    /// unless given.
     pub start: Params,
     /// Calibrate each cell (off: every cell gets `start`).
     pub calibrate: bool,
@@ -72,7 +73,8 @@ impl Default for ExecConfig {
 /// A cell's calibration and what came of it.
 #[derive(Clone, Debug, Serialize)]
 pub struct CalibrationOutcome {
-    /// `calibrated`, `refused` (the cell runs with the start parameters) or
+    /// `calibrated`, `refused` (the cell runs with the start parameters as
+    /// a provisional set, as a user would without a calibrated file) or
     /// `off` (`--no-calibration`).
     pub status: &'static str,
     /// Why calibration refused the recording.
@@ -286,6 +288,7 @@ pub fn calibrate_cell(cp: &CellPlan, cfg: &ExecConfig) -> Result<CellResult> {
             Err(e) => {
                 out.status = "refused";
                 out.refused = Some(e.to_string());
+                out.params = out.params.into_provisional();
             }
         }
     }

@@ -110,7 +110,7 @@ pub fn markdown(ev: &Evaluation) -> String {
         "Rigs are drawn by the `plant` crate (shares no model code with the monitor). The rig sets were fixed before tuning; the held-out rigs are never looked at while tuning. The `temp_oil` column is written on rigs with an even seed and not on rigs with an odd seed, so both are covered. Each cell (rig × supply × temperature) is calibrated with `host-sim calibrate`'s fit from its own {:.0} s healthy closed-loop recording (own seeds); {}. Leak sizes are mean true flows after onset; size error is against the mean true flow over the last 4 s; latencies count mid-run onsets only, from the onset and from the moment the true flow (averaged over the detection window) first reaches the alarm level.\n",
         c.calibration_s,
         if ev.calibrate {
-            "a cell whose calibration is refused is evaluated with the nominal parameters (and counted below)"
+            "a cell whose calibration is refused is evaluated with the nominal parameters as a provisional set, as a user without a calibrated file runs it (never `healthy`, only gross leaks alarm; counted below)"
         } else {
             "**calibration off**: every cell uses the start parameters"
         },

@@ -309,7 +309,7 @@ pub fn calibration_table(out: &mut String, cells: &[&CellResult], runs: &[&RunRe
     let _ = writeln!(out, "### Calibration\n");
     let _ = writeln!(
         out,
-        "{calibrated} of {} cells calibrated, {refused} refused (those cells ran with the nominal parameters){}.\n",
+        "{calibrated} of {} cells calibrated, {refused} refused (those cells ran with the nominal parameters, provisional){}.\n",
         cells.len(),
         if calibrated + refused < cells.len() {
             ", calibration off for the rest"
