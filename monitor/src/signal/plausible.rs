@@ -17,7 +17,9 @@
 //! [`CLOSED_SPEED_M_S`] with the command inside the valve's dead zone, or
 //! clearly against the commanded direction, the command is contradicted:
 //! from the first such sample the sample is no evidence, and after
-//! [`COMMAND_FAULT_S`] of contradiction the command channel is faulted.
+//! [`COMMAND_FAULT_S`] of contradiction of a command that stayed where it
+//! is for [`COMMAND_SETTLE_S`] the command channel is faulted (a hunting
+//! loop's piston lags its swinging command: no evidence, but no fault).
 //! The contradiction drains ten times slower than it fills, so an open
 //! wire stays a fault through the holds between moves.
 //!
@@ -61,6 +63,15 @@ const SPEED_SMOOTHING_S: f32 = 0.02;
 pub const CLOSED_SPEED_M_S: f32 = 0.02;
 /// Command beyond the dead zone that names a direction.
 const DIRECTION_MARGIN: f32 = 0.05;
+/// How long the command must have stayed inside the dead zone, or beyond
+/// the direction margin on one side, before the motion contradicting it
+/// counts towards a fault, s. A position loop that hunts swings its command through the dead
+/// zone and from side to side faster than the piston (lagging by the
+/// valve's and the oil's dynamics) follows: on a development rig hunting
+/// at 14 Hz the piston still ran at 0.1 m/s against each new direction
+/// for 20–30 ms, and those moments added up to a false fault. An open
+/// wire's reading stays put.
+pub const COMMAND_SETTLE_S: f32 = 0.06;
 /// Contradiction time that faults the command, s.
 pub const COMMAND_FAULT_S: f32 = 0.3;
 /// The contradiction drains this many times slower than it fills.
@@ -176,6 +187,10 @@ pub struct CommandAgreement {
     null_offset: f32,
     x_smooth: Option<f32>,
     speed: f32,
+    /// Where the command is (inside the dead zone, beyond the margin on
+    /// one side, in between) and how long it has been there, s.
+    region: CommandRegion,
+    region_s: f32,
     contradiction_s: f32,
     faulted: bool,
     /// The command value that sits still, and the smoothed position when
@@ -192,6 +207,8 @@ impl CommandAgreement {
             null_offset,
             x_smooth: None,
             speed: 0.0,
+            region: CommandRegion::Between,
+            region_s: 0.0,
             contradiction_s: 0.0,
             faulted: false,
             still_u: f32::NAN,
@@ -214,11 +231,29 @@ impl CommandAgreement {
             Some(_) => {}
         }
         let opening = u - self.null_offset;
-        let v = self.speed;
-        let closed = opening.abs() <= self.dead_zone && v.abs() > CLOSED_SPEED_M_S;
         let margin = self.dead_zone + DIRECTION_MARGIN;
-        let against = (opening > margin && v < -CLOSED_SPEED_M_S)
-            || (opening < -margin && v > CLOSED_SPEED_M_S);
+        let region = if opening.abs() <= self.dead_zone {
+            CommandRegion::Closed
+        } else if opening > margin {
+            CommandRegion::Extend
+        } else if opening < -margin {
+            CommandRegion::Retract
+        } else {
+            CommandRegion::Between
+        };
+        if region == self.region {
+            self.region_s = Real::min(self.region_s + dt_s, COMMAND_SETTLE_S);
+        } else {
+            self.region = region;
+            self.region_s = 0.0;
+        }
+        let v = self.speed;
+        let closed = region == CommandRegion::Closed && v.abs() > CLOSED_SPEED_M_S;
+        let against = (region == CommandRegion::Extend && v < -CLOSED_SPEED_M_S)
+            || (region == CommandRegion::Retract && v > CLOSED_SPEED_M_S);
+        // Only a command that stayed where it is builds up to a fault; a
+        // piston lagging a swinging command is no evidence, but no fault.
+        let settled = self.region_s >= COMMAND_SETTLE_S;
         // Net travel while the command sits still near zero (a NaN anchor
         // never compares equal: the first sample re-anchors).
         let xs = self.x_smooth.unwrap_or(x_m);
@@ -228,10 +263,11 @@ impl CommandAgreement {
             self.still_x_m = xs;
         }
         let travel = (xs - self.still_x_m).abs();
-        let contradicted = closed || against || travel > STILL_SUSPECT_M;
-        if contradicted {
+        let drifting = travel > STILL_SUSPECT_M;
+        let contradicted = closed || against || drifting;
+        if (settled && (closed || against)) || drifting {
             self.contradiction_s = Real::min(self.contradiction_s + dt_s, COMMAND_MEMORY_S);
-        } else {
+        } else if !contradicted {
             self.contradiction_s = Real::max(self.contradiction_s - dt_s / COMMAND_DRAIN, 0.0);
         }
         if self.contradiction_s >= COMMAND_FAULT_S || travel > STILL_FAULT_M {
@@ -249,8 +285,22 @@ impl CommandAgreement {
     pub fn break_sequence(&mut self) {
         self.x_smooth = None;
         self.speed = 0.0;
+        self.region_s = 0.0;
         self.still_u = f32::NAN;
     }
+}
+
+/// Where a valve command is, for [`CommandAgreement`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum CommandRegion {
+    /// Inside the dead zone: the valve is closed.
+    Closed,
+    /// Beyond the direction margin, extending.
+    Extend,
+    /// Beyond the direction margin, retracting.
+    Retract,
+    /// Open, but too little to name a direction.
+    Between,
 }
 
 #[cfg(test)]
@@ -387,6 +437,30 @@ mod tests {
             contradicted += r.contradicted as u32;
         }
         assert_eq!(contradicted, 0);
+    }
+
+    #[test]
+    fn a_hunting_loop_whose_piston_lags_its_command_is_no_evidence_but_no_fault() {
+        // Development rig 1 at 100 bar, 40 °C: the loop hunts at 14 Hz, the
+        // command swings ±0.12 through the dead zone, and the piston's
+        // speed (±0.12 m/s) lags it by 100°, so that for 20–30 ms of every
+        // swing the piston still runs against the new direction. Those
+        // samples are no evidence; the command is not faulted.
+        let mut c = CommandAgreement::new(0.015, 0.0);
+        let mut rng = Lcg::new(7);
+        let w = 2.0 * core::f32::consts::PI * 14.0;
+        let lag = 100.0_f32.to_radians();
+        let mut contradicted = 0;
+        for k in 0..20_000 {
+            let t = k as f32 * 1e-3;
+            let u = 0.12 * (w * t).sin();
+            // x' = 0.12 m/s · sin(ωt − lag).
+            let x = 0.13 - 0.12 / w * (w * t - lag).cos() + 5e-5 * rng.gaussian() as f32;
+            let r = c.check(x, u, 1e-3);
+            assert!(!r.faulted, "{k}");
+            contradicted += r.contradicted as u32;
+        }
+        assert!(contradicted > 1_000, "{contradicted}");
     }
 
     #[test]
