@@ -299,6 +299,17 @@ fn targets_count_inconclusive_separately_and_flag_false_alarms() {
     assert_eq!(fa.pass, Some(false));
     assert!(fa.detail.starts_with("19/20"), "{}", fa.detail);
     assert_eq!(target(&ts, "healthy runs end").pass, Some(false));
+    // A sensor fault on a run without an injected fault is flagged too.
+    assert_eq!(target(&ts, "runs without an injected fault").pass, Some(true));
+    rs[3].sensor_faults.push(Alarm {
+        t_s: 9.9,
+        what: "u_valve".into(),
+    });
+    let refs: Vec<&RunResult> = rs.iter().collect();
+    let ts = report::target_list(&refs);
+    let sf = target(&ts, "runs without an injected fault");
+    assert_eq!(sf.pass, Some(false));
+    assert!(sf.detail.starts_with("19/20"), "{}", sf.detail);
 }
 
 #[test]

@@ -132,6 +132,7 @@ pub fn target_list(runs: &[&RunResult]) -> Vec<Target> {
     let sensor = of(&|r| r.spec.fault.is_some_and(FaultKind::expects_sensor_fault));
     let unsure = of(&|r| r.spec.fault.is_some_and(|f| !f.expects_sensor_fault()));
     let hold = of(&|r| r.spec.category == Category::HealthyLongHold);
+    let unfaulted = of(&|r| r.spec.fault.is_none());
     let after = of(&|r| r.spec.category == Category::LeakAfterHold);
 
     let mut t = vec![
@@ -159,6 +160,12 @@ pub fn target_list(runs: &[&RunResult]) -> Vec<Target> {
         "leak runs: no alarm before the onset",
         &leaks,
         |r| !r.false_alarm(),
+    ));
+    // A sensor declared faulty on a sound machine drops the relay too.
+    t.push(all_of(
+        "runs without an injected fault: no sensor fault",
+        &unfaulted,
+        |r| r.sensor_faults.is_empty(),
     ));
     t.push(all_of(
         "leak runs detected (closed loop, 0.1–1.0 l/min)",
