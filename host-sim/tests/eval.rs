@@ -300,7 +300,10 @@ fn targets_count_inconclusive_separately_and_flag_false_alarms() {
     assert!(fa.detail.starts_with("19/20"), "{}", fa.detail);
     assert_eq!(target(&ts, "healthy runs end").pass, Some(false));
     // A sensor fault on a run without an injected fault is flagged too.
-    assert_eq!(target(&ts, "runs without an injected fault").pass, Some(true));
+    assert_eq!(
+        target(&ts, "runs without an injected fault").pass,
+        Some(true)
+    );
     rs[3].sensor_faults.push(Alarm {
         t_s: 9.9,
         what: "u_valve".into(),

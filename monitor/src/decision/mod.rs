@@ -569,38 +569,24 @@ mod tests {
         let gross = p.baseline.provisional_floor_lpm;
         assert!(gross > 1.0, "{gross}");
         // A healthy reading, evidence in every sample for 10 s.
-        let mut d: Decision<f64> = Decision::new(&p);
-        let mut events = Events::new();
-        for i in 0..10_000 {
-            d.update(
-                &outputs(0.0),
-                0.001,
-                1.0,
-                true,
-                1,
-                i as f64 * 0.001,
-                &mut events,
-            );
-        }
+        let after_10_s = |p: &Params| {
+            let mut d: Decision<f64> = Decision::new(p);
+            let mut events = Events::new();
+            for i in 0..10_000 {
+                let t = i as f64 * 0.001;
+                d.update(&outputs(0.0), 0.001, 1.0, true, 1, t, &mut events);
+            }
+            d
+        };
+        let d = after_10_s(&p);
         assert!(!d.conclusive());
         assert_ne!(d.flags() & health::PROVISIONAL, 0);
         // The same evidence with the calibrated set concludes.
-        let mut d: Decision<f64> = Decision::new(&Params::nominal());
-        for i in 0..10_000 {
-            d.update(
-                &outputs(0.0),
-                0.001,
-                1.0,
-                true,
-                1,
-                i as f64 * 0.001,
-                &mut events,
-            );
-        }
+        let d = after_10_s(&Params::nominal());
         assert!(d.conclusive());
         assert_eq!(d.flags() & health::PROVISIONAL, 0);
-        // Leaks: the calibrated set's level no longer alarms, a gross one
-        // does, in every region.
+        // Leaks: below the gross level none alarms, above it one does, in
+        // every region.
         for region in 0..3 {
             assert_eq!(time_to_alarm(&p, 0.9 * gross, region), None);
             assert!(time_to_alarm(&p, 1.5 * gross, region).is_some());
