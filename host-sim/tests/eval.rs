@@ -618,6 +618,35 @@ fn cli_rejects_an_unknown_set_and_documents_the_sets() {
     }
 }
 
+/// A cell whose calibration is refused (here: a 5 s recording) runs the
+/// start parameters as a provisional set, as a user without a calibrated
+/// file would; a calibrated one does not.
+#[test]
+fn a_refused_cell_runs_a_provisional_set() {
+    let plan = plan(&PlanConfig {
+        rigs: Some(1),
+        quick: true,
+        calibration_s: 5.0,
+        ..Default::default()
+    });
+    let cell = exec::calibrate_cell(&plan.cells[0], &ExecConfig::default()).unwrap();
+    let c = &cell.calibration;
+    assert_eq!(c.status, "refused");
+    assert!(c
+        .refused
+        .as_deref()
+        .is_some_and(|why| why.contains("too short")));
+    assert!(c.params.is_provisional());
+    assert_eq!(
+        c.params.baseline.provisional_floor_lpm,
+        monitor::params::PROVISIONAL_FLOOR_LPM
+    );
+    // Everything else is the start set.
+    let mut back = c.params.clone();
+    back.baseline.provisional_floor_lpm = 0.0;
+    assert_eq!(back, Params::nominal());
+}
+
 /// Where an eval run's time goes (diagnostic: `cargo test --release -p
 /// host-sim --test eval -- --ignored --nocapture`).
 #[test]
