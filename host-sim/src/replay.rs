@@ -103,6 +103,11 @@ pub struct ReplaySummary {
     /// counted but not kept in
     /// `events` (a recording of endless gaps or faults stays bounded).
     pub events_dropped: u64,
+    /// The parameters were provisional (not calibrated for the
+    /// installation: `replay` without `--params`): the gross leak level
+    /// above which alone leaks alarm, l/min; the verdict is never
+    /// `healthy`. `null`: the parameters describe the installation.
+    pub provisional_floor_lpm: Option<f64>,
 }
 
 /// Most events a replay keeps in its summary.
@@ -252,6 +257,9 @@ pub fn replay<T: Real, R: BufRead>(
         noise: NoiseSummary::default(),
         mean_nis: None,
         events_dropped: 0,
+        provisional_floor_lpm: params
+            .is_provisional()
+            .then_some(params.baseline.provisional_floor_lpm),
     };
     let (mut inconclusive, mut nis_sum, mut nis_n) = (0u64, 0.0, 0u64);
     let t0 = first.as_ref().map(|s| s.t_s);
@@ -345,6 +353,12 @@ pub fn print_summary(s: &ReplaySummary, out: &mut dyn Write) -> std::io::Result<
         "evidence    leading {}; P(healthy) {:.3}, P(internal) {:.3}, P(external) {:.3}, P(both) {:.3}",
         s.leading, p[0], p[1], p[2], p[3]
     )?;
+    if let Some(gross) = s.provisional_floor_lpm {
+        writeln!(
+            out,
+            "parameters  provisional, not calibrated for this installation: never `healthy`, leaks alarm above {gross:.2} l/min only (give --params, e.g. from host-sim calibrate)"
+        )?;
+    }
     if s.model_mismatch_fraction > 0.01 {
         writeln!(
             out,

@@ -173,9 +173,11 @@ fn example_recordings_give_their_verdicts() {
         };
         let v = replay(&["--params", params.to_str().unwrap()]);
         assert_eq!(v["verdict"], want, "{file}");
+        assert!(v["provisional_floor_lpm"].is_null(), "{file}");
         let v = replay(&[]);
         assert_eq!(v["verdict"], "inconclusive", "{file} without --params");
         assert!(v["first_alarm_s"].is_null(), "{file} without --params");
+        assert_eq!(v["provisional_floor_lpm"], 5.0, "{file} without --params");
     }
 }
 
