@@ -65,12 +65,12 @@ pub const CLOSED_SPEED_M_S: f32 = 0.02;
 const DIRECTION_MARGIN: f32 = 0.05;
 /// How long the command must have stayed inside the dead zone, or beyond
 /// the direction margin on one side, before the motion contradicting it
-/// counts towards a fault, s. A position loop that hunts swings its command through the dead
-/// zone and from side to side faster than the piston (lagging by the
-/// valve's and the oil's dynamics) follows: on a development rig hunting
-/// at 14 Hz the piston still ran at 0.1 m/s against each new direction
-/// for 20–30 ms, and those moments added up to a false fault. An open
-/// wire's reading stays put.
+/// counts towards a fault, s. A position loop that hunts swings its
+/// command through the dead zone and from side to side faster than the
+/// piston (lagging by the valve's and the oil's dynamics) follows: on a
+/// development rig hunting at 14 Hz the piston still ran at 0.1 m/s
+/// against each new direction for 20–30 ms, and those moments added up
+/// to a false fault. An open wire's reading stays put.
 pub const COMMAND_SETTLE_S: f32 = 0.06;
 /// Contradiction time that faults the command, s.
 pub const COMMAND_FAULT_S: f32 = 0.3;
