@@ -357,6 +357,9 @@ fn calibrate_refuses_a_recording_without_moves() {
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("still.csv") && err.contains("moves"), "{err}");
+    // No file, and the user is told what the installation runs meanwhile.
+    assert!(!dir.path().join("p.toml").exists());
+    assert!(err.contains("runs provisional"), "{err}");
 }
 
 #[test]

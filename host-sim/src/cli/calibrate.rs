@@ -37,6 +37,11 @@ pub fn run(a: Args) -> Result<ExitCode> {
             if let Some(report) = e.report() {
                 eprint!("{report}");
             }
+            // What the installation gets meanwhile.
+            eprintln!(
+                "note: no parameter file written; without an installation's set the monitor runs provisional: never `healthy`, leaks alarm above {} l/min only (docs/calibration.md)",
+                monitor::params::PROVISIONAL_FLOOR_LPM
+            );
             return Err(e).with_context(|| format!("{}", a.recording.display()));
         }
     };
