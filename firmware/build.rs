@@ -11,7 +11,8 @@
 //!   the workspace root), it is validated with the monitor's own rules and
 //!   compiled in as `INSTALLATION`; otherwise the reference rig's nominal
 //!   parameters are, as a provisional set (`Params::PROVISIONAL`: never
-//!   `healthy`, gross leaks only, until an installation set is uploaded). A bad file fails the build, naming file and field.
+//!   `healthy`, gross leaks only, until an installation set is uploaded).
+//!   A bad file fails the build, naming file and field.
 //! - Acknowledge key: `LEAK_MONITOR_ACK_KEY` (32 hexadecimal digits, the
 //!   installation's 128-bit key, see `docs/acknowledge.md`) is compiled in
 //!   as `ACK_KEY`. Without it the public development key is, with a build

@@ -162,16 +162,16 @@ impl<T: Real> Decision<T> {
     pub fn new(params: &Params) -> Self {
         let f = &params.filter;
         let b = &params.baseline;
-        let [floor_internal, floor_external] = b.detection_floor_lpm;
+        // The floor everywhere: the installation's, or a provisional set's
+        // gross level.
+        let [floor_internal, floor_external] = b
+            .detection_floor_lpm
+            .map(|f| f.max(b.provisional_floor_lpm));
         // Per leak and region: the larger of the floor everywhere and the
         // region's.
-        // A provisional set's gross level is a floor everywhere.
-        let gross = b.provisional_floor_lpm;
         let floor = PerLeak::new(
-            b.region_floor_internal_lpm
-                .map(|f| f.max(floor_internal).max(gross)),
-            b.region_floor_external_lpm
-                .map(|f| f.max(floor_external).max(gross)),
+            b.region_floor_internal_lpm.map(|f| f.max(floor_internal)),
+            b.region_floor_external_lpm.map(|f| f.max(floor_external)),
         );
         let a = &params.alarm;
         Self {
