@@ -11,6 +11,19 @@ fn host_sim(args: &[&str]) -> Output {
         .expect("host-sim runs")
 }
 
+/// `host_sim(args)`, which must succeed (the failure names the arguments
+/// and shows stderr).
+fn host_sim_ok(args: &[&str]) -> Output {
+    let out = host_sim(args);
+    assert!(
+        out.status.success(),
+        "host-sim {}: {}",
+        args.join(" "),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
 fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
     let p = dir.join(name);
     std::fs::write(&p, text).unwrap();
@@ -108,12 +121,7 @@ fn replay_json_has_the_contract_fields() {
     }
     body += "3.000,50.0,,24.9,0.6,0.0400,0.0\n";
     let rec = write(dir.path(), "rest.csv", &body);
-    let out = host_sim(&["replay", rec.to_str().unwrap(), "--json"]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let out = host_sim_ok(&["replay", rec.to_str().unwrap(), "--json"]);
     let text = String::from_utf8(out.stdout).unwrap();
     assert_eq!(text.trim().lines().count(), 1, "exactly one JSON object");
     let v: serde_json::Value = serde_json::from_str(&text).unwrap();
@@ -163,12 +171,7 @@ fn example_recordings_give_their_verdicts() {
         let replay = |extra: &[&str]| {
             let mut args = vec!["replay", p.to_str().unwrap(), "--json"];
             args.extend_from_slice(extra);
-            let out = host_sim(&args);
-            assert!(
-                out.status.success(),
-                "{file}: {}",
-                String::from_utf8_lossy(&out.stderr)
-            );
+            let out = host_sim_ok(&args);
             serde_json::from_slice::<serde_json::Value>(&out.stdout).unwrap()
         };
         let v = replay(&["--params", params.to_str().unwrap()]);
@@ -185,7 +188,7 @@ fn example_recordings_give_their_verdicts() {
 fn simulate_writes_a_recording_replay_reads() {
     let dir = tempfile::tempdir().unwrap();
     let p = dir.path().join("sim.csv");
-    let out = host_sim(&[
+    host_sim_ok(&[
         "simulate",
         "-o",
         p.to_str().unwrap(),
@@ -195,11 +198,6 @@ fn simulate_writes_a_recording_replay_reads() {
         "--temp",
         "40",
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
     let text = std::fs::read_to_string(&p).unwrap();
     assert!(text.starts_with("# format=leak-recording/1\n"));
     assert!(text.contains("t,p_supply,p_piston,p_rod,p_tank,x_piston,u_valve,temp_oil,q_internal_lpm,q_external_lpm\n"));
@@ -228,12 +226,7 @@ fn a_dumped_rig_round_trips_through_rig() {
             "0.2",
         ];
         args.extend_from_slice(extra);
-        let out = host_sim(&args);
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        host_sim_ok(&args);
     };
     let (seeded, again) = (path("seeded.csv"), path("again.csv"));
     let (dump, dump2) = (path("rig.toml"), path("rig2.toml"));
@@ -291,7 +284,7 @@ fn calibrate_writes_params_that_replay_accepts() {
     let dir = tempfile::tempdir().unwrap();
     let rec = dir.path().join("healthy.csv.gz");
     let params = dir.path().join("site.toml");
-    let out = host_sim(&[
+    host_sim_ok(&[
         "simulate",
         "-o",
         rec.to_str().unwrap(),
@@ -301,22 +294,12 @@ fn calibrate_writes_params_that_replay_accepts() {
         "5",
         "--no-truth",
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let out = host_sim(&[
+    let out = host_sim_ok(&[
         "calibrate",
         rec.to_str().unwrap(),
         "-o",
         params.to_str().unwrap(),
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
     let report = String::from_utf8_lossy(&out.stdout);
     assert!(
         report.contains("valve flow gain") && report.contains("NIS"),
@@ -324,18 +307,13 @@ fn calibrate_writes_params_that_replay_accepts() {
     );
     let text = std::fs::read_to_string(&params).unwrap();
     assert!(text.starts_with("# Installation parameters fitted by host-sim calibrate"));
-    let out = host_sim(&[
+    let out = host_sim_ok(&[
         "replay",
         rec.to_str().unwrap(),
         "--params",
         params.to_str().unwrap(),
         "--json",
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(v["verdict"], "healthy");
 }
@@ -368,7 +346,7 @@ fn plot_of_a_leak_recording_shows_the_verdict_and_the_alarm() {
     let rec = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/internal.csv.gz");
     let params = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/reference-rig.toml");
     let svg = dir.path().join("internal.svg");
-    let out = host_sim(&[
+    host_sim_ok(&[
         "plot",
         "--params",
         params.to_str().unwrap(),
@@ -376,11 +354,6 @@ fn plot_of_a_leak_recording_shows_the_verdict_and_the_alarm() {
         "-o",
         svg.to_str().unwrap(),
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
     let text = std::fs::read_to_string(&svg).unwrap();
     assert!(text.trim_start().starts_with("<svg"), "not an SVG");
     for s in [
