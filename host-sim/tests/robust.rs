@@ -369,6 +369,30 @@ fn a_valve_whose_edges_are_fitted_before_null_gets_the_null_region() {
     assert_warns(&cal, |w| w.contains("taken as 0.005 (the null region"));
 }
 #[test]
+fn a_piston_that_moves_both_ways_but_never_steadily_is_calibrated_partially() {
+    // Development rig 1 (100 bar, 25 °C): breakaway friction 1.6 × the
+    // Coulomb force, and its position loop stick-slips and hunts: 0.7 s
+    // of quasi-steady extending and none retracting in 60 s, yet it moves
+    // both ways for many seconds. The valve and load stay as they were;
+    // noise, leakage, baseline and floor are fitted and validated (it was
+    // refused, and the installation stayed provisional).
+    let cal = calibrated(1, 100.0, 25.0);
+    assert!(cal.partial, "{:?}", cal.warnings);
+    assert!(
+        cal.warnings[0].starts_with("partial calibration")
+            && cal.warnings[0].contains("0.0 s of quasi-steady retracting"),
+        "{:?}",
+        cal.warnings
+    );
+    assert!(
+        cal.motion.moving_s.iter().all(|&s| s > 5.0),
+        "{:?}",
+        cal.motion
+    );
+    assert_eq!(cal.params.baseline.provisional_floor_lpm, 0.0);
+}
+
+#[test]
 fn an_installation_described_only_coarsely_is_calibrated_with_a_high_floor() {
     use host_sim::calibrate::MAX_DETECTION_FLOOR_LPM;
     // Development rig 1 (50 bar, 40 °C): its valve does not fit the

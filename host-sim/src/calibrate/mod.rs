@@ -310,9 +310,12 @@ fn calibrate_mechanics(
     start: &Params,
 ) -> Result<Calibration, CalibrationError> {
     // A recording without moves in both directions cannot even validate
-    // a partial calibration: the monitor must have seen both.
+    // a partial calibration: the monitor must have seen both, for as long
+    // as a full one needs steady moves. Steady or not: a stick-slipping
+    // piston never moves steadily.
     let moves = Motion::of(&fit::prepare(samples));
-    let both_ways = moves.extend_s > 0.0 && moves.retract_s > 0.0;
+    let both_ways = moves.extend_s > 0.0 && moves.retract_s > 0.0
+        || moves.moving_s.iter().all(|&s| s >= MIN_STEADY_S);
     match calibrate_with(samples, start, Mechanics::Strict) {
         Err(e @ (CalibrationError::NotEnoughMotion { .. } | CalibrationError::PoorFit { .. }))
             if both_ways =>

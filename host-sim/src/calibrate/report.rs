@@ -48,8 +48,14 @@ impl Calibration {
         let m = &self.motion;
         let _ = writeln!(
             s,
-            "Quasi-steady moves: extending {:.1} s (command σ {:.3}), retracting {:.1} s (command σ {:.3}); at rest {:.1} s.",
-            m.extend_s, m.extend_spread, m.retract_s, m.retract_spread, m.hold_s
+            "Quasi-steady moves: extending {:.1} s (command σ {:.3}), retracting {:.1} s (command σ {:.3}); moving at all: extending {:.1} s, retracting {:.1} s; at rest {:.1} s.",
+            m.extend_s,
+            m.extend_spread,
+            m.retract_s,
+            m.retract_spread,
+            m.moving_s[0],
+            m.moving_s[1],
+            m.hold_s
         );
         if !self.fits.is_empty() {
             let _ = writeln!(s, "\nFitted:");

@@ -23,6 +23,8 @@ pub struct Prepared {
     pub stride_s: f64,
     /// Time at rest (smoothed speed below `MIN_SPEED`), s.
     pub hold_s: f64,
+    /// Time moving out / in (smoothed speed at least `MIN_SPEED`), s.
+    pub moving_s: [f64; 2],
 }
 
 fn moving_average(y: &[f64], h: usize) -> Vec<f64> {
@@ -63,6 +65,8 @@ pub fn prepare_pieces(pieces: &[&[Sample]]) -> Prepared {
             to.extend(from);
         }
         all.hold_s += d.hold_s;
+        all.moving_s[0] += d.moving_s[0];
+        all.moving_s[1] += d.moving_s[1];
         period_sum += d.stride_s * piece.len() as f64;
         n_sum += piece.len();
     }
@@ -126,15 +130,14 @@ pub fn prepare(samples: &[Sample]) -> Prepared {
     } else {
         0.0
     };
-    let hold_s = v
-        .get(h..n.saturating_sub(h))
-        .unwrap_or(&[])
-        .iter()
-        .filter(|v| v.abs() < MIN_SPEED)
-        .count() as f64
-        * period;
+    let inner = v.get(h..n.saturating_sub(h)).unwrap_or(&[]);
+    let time_where = |f: fn(f64) -> bool| inner.iter().filter(|&&v| f(v)).count() as f64 * period;
     Prepared {
-        hold_s,
+        hold_s: time_where(|v| v.abs() < MIN_SPEED),
+        moving_s: [
+            time_where(|v| v >= MIN_SPEED),
+            time_where(|v| v <= -MIN_SPEED),
+        ],
         p2,
         p3,
         p4,
@@ -171,6 +174,9 @@ pub struct Motion {
     pub retract_spread: f64,
     /// Time at rest, s.
     pub hold_s: f64,
+    /// Time moving out / in at [`MIN_SPEED`] or faster, steady or not
+    /// (a stick-slipping or hunting piston moves without being steady), s.
+    pub moving_s: [f64; 2],
 }
 
 impl Motion {
@@ -202,6 +208,7 @@ impl Motion {
             extend_spread: sd(ext),
             retract_spread: sd(ret),
             hold_s: d.hold_s,
+            moving_s: d.moving_s,
         }
     }
 }

@@ -1,6 +1,7 @@
 //! The valve regression on exact synthetic samples.
 
 use super::*;
+use monitor::Sample;
 
 /// Steady samples of a valve with flow gains `gain` × the nominal ones
 /// and its edges at the nominal dead zone and null, both chambers'
@@ -91,4 +92,35 @@ fn the_valve_fit_counts_the_oil_compressed_while_the_pressures_move() {
     as_steady.dp4.iter_mut().for_each(|r| *r = 0.0);
     let uncorrected = fitted_gain(&as_steady, &p);
     assert!((uncorrected - 1.05).abs() > 1e-3, "{uncorrected}");
+}
+
+#[test]
+fn a_stick_slipping_piston_moves_without_moving_steadily() {
+    // 2 s out, then 2 s in, 1 mm every 80 ms (stuck 70 ms, slipping 10):
+    // 12.5 mm/s on average, never at one speed for 0.2 s.
+    let x_at = |t_ms: i64| {
+        let slips = |ms: i64| (ms / 80) as f32 * 0.001;
+        if t_ms < 2000 {
+            0.05 + slips(t_ms)
+        } else {
+            0.05 + slips(2000) - slips(t_ms - 2000)
+        }
+    };
+    let recording: Vec<Sample> = (0..4000)
+        .map(|ms| Sample {
+            t_s: ms as f64 * 1e-3,
+            p_supply_bar: Some(100.0),
+            p_piston_bar: Some(50.0),
+            p_rod_bar: Some(45.0),
+            p_tank_bar: Some(1.0),
+            x_piston_m: Some(x_at(ms)),
+            u_valve: Some(if ms < 2000 { 0.05 } else { -0.05 }),
+            temp_oil_c: None,
+        })
+        .collect();
+    let m = Motion::of(&prepare(&recording));
+    // A few samples at the top of each slip look steady, far from the
+    // 1.5 s per direction a valve fit needs.
+    assert!(m.extend_s.max(m.retract_s) < 0.2, "{m:?}");
+    assert!(m.moving_s.iter().all(|&s| s > 1.0), "{m:?}");
 }
