@@ -13,7 +13,9 @@
 //!    5 s at 1.2 times; a reading that only touches the level never
 //!    alarms. Raised leaks go to the one leak-alarm latch ([`latch`]):
 //!    they stay until acknowledged, and a new leak while one is latched
-//!    escalates (internal + external = both). The warning flag has
+//!    escalates (internal + external = both); with one leak raised, the
+//!    other must also read more than [`CROSS_TALK`] × its flow (the
+//!    model's error shares flow between the two). The warning flag has
 //!    hysteresis: on at `warning_lpm`, off below 80 %
 //!    ([`WARNING_RELEASE`]) of it.
 //!
@@ -84,6 +86,9 @@ const LOGLIK_SPREAD_MAX: f64 = 30.0;
 /// The CUSUM's relative excess over the alarm level is clipped to
 /// [−1, `EXCESS_MAX`]: one huge reading cannot raise the alarm on its own.
 const EXCESS_MAX: f64 = 4.0;
+/// Share of a raised leak's flow that the other leak must exceed to be
+/// raised as well.
+const CROSS_TALK: f64 = 0.4;
 /// The warning goes off when both leaks fall below this fraction of their
 /// warning level (hysteresis).
 const WARNING_RELEASE: f64 = 0.8;
@@ -347,7 +352,20 @@ impl<T: Real> Decision<T> {
         let mut new_leak = false;
         for k in Leak::ALL {
             let excess = if self.supports(k) {
-                let level = self.alarm_lpm[k][region];
+                // With the other leak raised, part of its flow reads as
+                // this one (the two coefficients trade off in the model's
+                // error): this one must stand out from that share
+                // ([`CROSS_TALK`]).
+                let other = match k {
+                    Leak::Internal => Leak::External,
+                    Leak::External => Leak::Internal,
+                };
+                let share = if self.raised[other] {
+                    T::c(CROSS_TALK) * self.fast[other]
+                } else {
+                    T::ZERO
+                };
+                let level = self.alarm_lpm[k][region].max(share);
                 ((self.fast_lower[k] - level) / level).clamp_to(-T::ONE, T::c(EXCESS_MAX))
             } else {
                 -T::ONE
@@ -561,6 +579,39 @@ mod tests {
         assert!(time_to_alarm(&p, 1.5, 2).is_some());
         // The floor everywhere still applies where a region's is lower.
         assert_eq!(time_to_alarm(&p, 0.09, 0), None);
+    }
+
+    #[test]
+    fn a_second_leak_must_stand_out_from_the_first_ones_cross_talk() {
+        // The `both` hypothesis explains the data best; the internal leak
+        // reads 1 l/min and is raised first.
+        let both = |internal_lpm: f64, external_lpm: f64| {
+            let mut out = outputs(internal_lpm);
+            for (h, o) in Hypothesis::ALL.into_iter().zip(out.iter_mut().flatten()) {
+                o.flow_external_lpm = external_lpm;
+                o.log_likelihood = if h == Hypothesis::Both { 0.0 } else { -50.0 };
+            }
+            out
+        };
+        let run = |external_lpm: f64| {
+            let mut d: Decision<f64> = Decision::new(&Params::nominal());
+            let mut events = Events::new();
+            for i in 0..20_000 {
+                let t = i as f64 * 0.001;
+                let ext = if t < 5.0 { 0.0 } else { external_lpm };
+                d.update(&both(1.0, ext), 0.001, 1.0, true, 1, t, &mut events);
+                if t < 5.0 && t > 4.9 {
+                    assert_eq!(d.latched(), LeakSet::INTERNAL, "internal first");
+                }
+            }
+            d.latched()
+        };
+        // 0.3 l/min of external reading, alone well above the alarm
+        // level, is within 0.4 of the internal leak's flow: no `both`.
+        assert!(0.3 > 3.0 * Params::nominal().alarm.alarm_lpm);
+        assert_eq!(run(0.3), LeakSet::INTERNAL);
+        // 0.6 l/min stands out: both.
+        assert_eq!(run(0.6), LeakSet::BOTH);
     }
 
     #[test]
