@@ -368,6 +368,7 @@ fn a_valve_whose_edges_are_fitted_before_null_gets_the_null_region() {
     assert_eq!(cal.params.valve.dead_zone, 0.005);
     assert_warns(&cal, |w| w.contains("taken as 0.005 (the null region"));
 }
+
 #[test]
 fn a_piston_that_moves_both_ways_but_never_steadily_is_calibrated_partially() {
     // Development rig 1 (100 bar, 25 °C): breakaway friction 1.6 × the

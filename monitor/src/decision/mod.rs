@@ -86,8 +86,13 @@ const LOGLIK_SPREAD_MAX: f64 = 30.0;
 /// The CUSUM's relative excess over the alarm level is clipped to
 /// [−1, `EXCESS_MAX`]: one huge reading cannot raise the alarm on its own.
 const EXCESS_MAX: f64 = 4.0;
-/// Share of a raised leak's flow that the other leak must exceed to be
-/// raised as well.
+/// Share of a raised leak's flow (fast average) that the other leak's
+/// must exceed to be raised as well. On the development rigs a large
+/// internal leak read 0.2–0.3 l/min of external flow at holds (the two
+/// coefficients trade off in the model's error), and 13 internal-leak
+/// runs ended `both`; with 0.4, 8 more single leaks of 336 runs were
+/// isolated and 2 of 24 true pairs at 0.5 l/min each were reported as
+/// the larger leak only (0.6: 11 more, 7 pairs lost).
 const CROSS_TALK: f64 = 0.4;
 /// The warning goes off when both leaks fall below this fraction of their
 /// warning level (hysteresis).
