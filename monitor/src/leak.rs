@@ -20,6 +20,14 @@ impl Leak {
     /// Both leaks, internal first.
     pub const ALL: [Leak; 2] = [Self::Internal, Self::External];
 
+    /// The other leak.
+    pub const fn other(self) -> Leak {
+        match self {
+            Self::Internal => Self::External,
+            Self::External => Self::Internal,
+        }
+    }
+
     /// The set holding just this leak.
     pub const fn set(self) -> LeakSet {
         match self {

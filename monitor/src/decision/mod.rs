@@ -361,12 +361,8 @@ impl<T: Real> Decision<T> {
                 // this one (the two coefficients trade off in the model's
                 // error): this one must stand out from that share
                 // ([`CROSS_TALK`]).
-                let other = match k {
-                    Leak::Internal => Leak::External,
-                    Leak::External => Leak::Internal,
-                };
-                let share = if self.raised[other] {
-                    T::c(CROSS_TALK) * self.fast[other]
+                let share = if self.raised[k.other()] {
+                    T::c(CROSS_TALK) * self.fast[k.other()]
                 } else {
                     T::ZERO
                 };
