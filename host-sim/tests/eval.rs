@@ -171,7 +171,7 @@ fn latency_counts_from_the_onset_and_from_the_first_flow_above_the_alarm_level()
 }
 
 #[test]
-fn size_error_is_against_the_true_flow_over_the_last_4_s() {
+fn size_error_is_against_the_true_flow_averaged_as_the_monitor_averages_its_size() {
     let s = spec(Category::Leak, 0.0, 0.3, 30.0);
     let (t, q) = truth_series(60.0, |t| {
         let qe = if t < 30.0 {
@@ -183,7 +183,8 @@ fn size_error_is_against_the_true_flow_over_the_last_4_s() {
         };
         [0.0, qe, 0.0]
     });
-    let truth = exec::truth_summary(&s, &t, &q, &Params::nominal());
+    let params = Params::nominal();
+    let truth = exec::truth_summary(&s, &t, &q, &params);
     assert!(
         (truth.last_lpm[1] - 0.4).abs() < 1e-3,
         "{:?}",
@@ -191,9 +192,18 @@ fn size_error_is_against_the_true_flow_over_the_last_4_s() {
     );
     let after = (26.0 * 0.2 + 4.0 * 0.4) / 30.0;
     assert!((truth.after_onset_lpm[1] - after).abs() < 1e-3);
+    // The monitor's size is an exponential average over the evidence
+    // window (4 s): 4 s after the step from 0.2 to 0.4 it is 0.4 − 0.2/e.
+    let tau = params.filter.evidence_window_s;
+    let size = 0.4 - 0.2 * (-4.0 / tau).exp();
+    assert!(
+        (truth.size_lpm[1] - size).abs() < 1e-3,
+        "{:?} vs {size}",
+        truth.size_lpm
+    );
     let mut r = result(s, "external", &[(31.0, "external")]);
     r.truth = truth;
-    r.est_lpm = [Some(0.01), Some(0.42)];
+    r.est_lpm = [Some(0.01), Some(1.05 * size)];
     let e = r.size_errors();
     assert_eq!(e.len(), 1, "only the present leak");
     assert!((e[0] - 0.05).abs() < 1e-3, "{e:?}");
@@ -325,6 +335,7 @@ fn leak_targets_use_medians_per_kind_and_size() {
         );
         r.truth = TruthSummary {
             last_lpm: [0.5, 0.0],
+            size_lpm: [0.5, 0.0],
             flowing_s: Some(30.2),
             ..Default::default()
         };

@@ -87,14 +87,16 @@ impl RunResult {
     }
 
     /// |reported − true| / true of each present leak, the true flow being
-    /// the mean over the last 4 s (a missing estimate counts as 0).
+    /// averaged as the monitor averages its size ([`TruthSummary::size_lpm`];
+    /// a missing estimate counts as 0).
     pub fn size_errors(&self) -> Vec<f64> {
         let present = [self.spec.internal(), self.spec.external()];
+        let truth = self.truth.size_lpm;
         (0..2)
-            .filter(|&k| present[k] && self.truth.last_lpm[k] > 1e-6)
+            .filter(|&k| present[k] && truth[k] > 1e-6)
             .map(|k| {
                 let est = self.est_lpm[k].unwrap_or(0.0);
-                (est - self.truth.last_lpm[k]).abs() / self.truth.last_lpm[k]
+                (est - truth[k]).abs() / truth[k]
             })
             .collect()
     }

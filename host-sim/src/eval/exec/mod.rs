@@ -128,6 +128,10 @@ pub struct TruthSummary {
     pub duration_s: f64,
     /// Mean true internal / external flow over the last 4 s, l/min.
     pub last_lpm: [f64; 2],
+    /// The true flows at the end averaged as the monitor averages the
+    /// size it reports (exponentially over `filter.evidence_window_s`),
+    /// l/min: what the size error compares against.
+    pub size_lpm: [f64; 2],
     /// Mean true flows from the onset to the end, l/min.
     pub after_onset_lpm: [f64; 2],
     /// When a present leak's true flow, averaged like the detection

@@ -135,6 +135,8 @@ pub fn truth_summary(spec: &RunSpec, t: &[f64], q: &[[f32; 3]], params: &Params)
     let present = [spec.internal(), spec.external()];
     let mut flowing_s = None;
     let mut short = [0.0f64; 2];
+    // The true flow averaged as the monitor averages the size it reports.
+    let mut reported = [0.0f64; 2];
     let mut speed = 0.0f64;
     let (mut still_from, mut best_hold): (Option<f64>, Option<(f64, f64)>) = (None, None);
     let mut moving_from: Option<f64> = None;
@@ -144,8 +146,10 @@ pub fn truth_summary(spec: &RunSpec, t: &[f64], q: &[[f32; 3]], params: &Params)
         let dt = (ti - last).max(0.0);
         last = ti;
         let a = (dt / params.filter.detection_window_s).min(1.0);
+        let a_size = (dt / params.filter.evidence_window_s).min(1.0);
         for k in 0..2 {
             short[k] += a * ((qi[k] as f64).abs() - short[k]);
+            reported[k] += a_size * (qi[k] as f64 - reported[k]);
             if flowing_s.is_none()
                 && present[k]
                 && ti >= onset
@@ -175,6 +179,7 @@ pub fn truth_summary(spec: &RunSpec, t: &[f64], q: &[[f32; 3]], params: &Params)
     TruthSummary {
         duration_s: t_end - t0,
         last_lpm: mean_where(t, q, |ti| ti >= t_end - SIZE_SPAN_S),
+        size_lpm: reported,
         after_onset_lpm: mean_where(t, q, |ti| ti >= onset),
         flowing_s,
         hold_s: best_hold.map(|(a, b)| [a, b]),
