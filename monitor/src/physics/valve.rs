@@ -25,6 +25,10 @@ pub fn orifice<T: Real>(dp: T, delta: T, sqrt_delta: T) -> (T, T) {
     }
 }
 
+/// Half-width of the rounded corner of the spool opening, fraction of
+/// travel: an edge starts to meter this far before the dead zone ends.
+pub const OPENING_ROUNDING: f64 = 0.002;
+
 /// Opening of a metering edge for spool travel `xi` beyond the dead zone:
 /// max(xi, 0), rounded over ±`eps` so its slope is continuous. Returns
 /// (opening, d opening / d xi).

@@ -6,7 +6,7 @@ use monitor::physics::fluid::bulk_modulus_exact;
 use monitor::physics::friction::stribeck_decay;
 use monitor::physics::load::load_terms_exact;
 use monitor::physics::units::{BAR, LPM_PER_M3S};
-use monitor::physics::valve::orifice;
+use monitor::physics::valve::{orifice, OPENING_ROUNDING};
 use monitor::Params;
 
 /// Samples each side of the centre for smoothing/differentiation.
@@ -465,8 +465,8 @@ impl EdgeHolds {
     pub fn of(d: &Prepared, p: &Params) -> Self {
         let v = &p.valve;
         let flows = Continuity::of(p);
-        // Covered with a margin for the rounded corner of the opening.
-        let covered = v.dead_zone - 0.004;
+        // Covered: short of where the model's opening starts to round.
+        let covered = v.dead_zone - OPENING_ROUNDING;
         let still = MIN_SPEED / 3.0;
         let span = 6 * HALF_WINDOW;
         let n = d.p2.len();

@@ -124,3 +124,33 @@ fn a_stick_slipping_piston_moves_without_moving_steadily() {
     assert!(m.extend_s.max(m.retract_s) < 0.2, "{m:?}");
     assert!(m.moving_s.iter().all(|&s| s > 1.0), "{m:?}");
 }
+
+#[test]
+fn holds_count_for_the_edge_fit_up_to_where_the_model_starts_to_meter() {
+    // A 2 s hold with the spool `xv` from null, the pressures steady.
+    let p = Params::nominal();
+    let hold = |xv: f64| -> EdgeHolds {
+        let recording: Vec<Sample> = (0..2000)
+            .map(|ms| Sample {
+                t_s: ms as f64 * 1e-3,
+                p_supply_bar: Some(100.0),
+                p_piston_bar: Some(55.0),
+                p_rod_bar: Some(40.0),
+                p_tank_bar: Some(1.0),
+                x_piston_m: Some(0.08),
+                u_valve: Some((xv - p.valve.null_offset) as f32),
+                temp_oil_c: None,
+            })
+            .collect();
+        EdgeHolds::of(&prepare(&recording), &p)
+    };
+    let dz = p.valve.dead_zone;
+    // Inside the dead zone short of the rounded corner: a hold for the fit,
+    // even within the corner's second width (which an earlier margin of
+    // 2 × `OPENING_ROUNDING` threw away).
+    let inside = hold(dz - 1.5 * OPENING_ROUNDING);
+    assert!(inside.hold_s > 1.0, "{}", inside.hold_s);
+    // Where the model's edge already meters: not a covered hold.
+    let corner = hold(dz - 0.5 * OPENING_ROUNDING);
+    assert_eq!(corner.hold_s, 0.0);
+}

@@ -34,7 +34,7 @@ use crate::physics::fluid::BulkModulusTable;
 pub use crate::physics::friction::stribeck_decay;
 use crate::physics::load::LoadTable;
 pub use crate::physics::units::{BAR, LEAK_UNIT, LPM_PER_M3S};
-use crate::physics::valve::{opening, orifice, SpoolStep};
+use crate::physics::valve::{opening, orifice, SpoolStep, OPENING_ROUNDING};
 use crate::real::Real;
 
 mod jacobian;
@@ -64,9 +64,6 @@ pub const X_REF: f64 = 0.1;
 pub const V_REF: f64 = 0.1;
 /// Unit of the scaled pressure states, Pa (100 bar).
 pub const P_REF: f64 = 1.0e7;
-/// Half-width of the rounded corner of the spool opening, fraction of travel.
-const OPENING_ROUNDING: f64 = 0.002;
-
 /// Inputs held over one sample, in SI units.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Inputs<T> {
