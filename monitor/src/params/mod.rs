@@ -556,12 +556,13 @@ impl Params {
         crate::protocol::Node::new(self.can.node).unwrap_or_default()
     }
 
-    /// The valve commands of the holding region: null ± dead zone.
+    /// The valve commands of the holding region, those that put the spool
+    /// (command + `null_offset`) inside the dead zone: −null ± dead zone.
     pub fn hold_band(&self) -> (f32, f32) {
         let v = &self.valve;
         (
-            (v.null_offset - v.dead_zone) as f32,
-            (v.null_offset + v.dead_zone) as f32,
+            (-v.null_offset - v.dead_zone) as f32,
+            (-v.null_offset + v.dead_zone) as f32,
         )
     }
 

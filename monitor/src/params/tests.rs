@@ -260,3 +260,18 @@ fn figures_read_well() {
     assert_eq!(n(-350.0), "-350");
     assert_eq!(n(f64::NAN), "NaN");
 }
+
+#[test]
+fn the_hold_band_is_where_the_command_puts_the_spool_in_the_dead_zone() {
+    // The spool sits at command + null offset (as the model has it): a
+    // valve whose null offset exceeds its dead zone holds at −null, and a
+    // zero command already opens it.
+    let mut p = Params::nominal();
+    p.valve.dead_zone = 0.005;
+    p.valve.null_offset = -0.01;
+    let band = p.hold_band();
+    let region = |u: f32| operating_region(u, band);
+    assert_eq!(region(0.01), 1, "spool centred");
+    assert_eq!(region(0.0), 0, "spool at −0.01: retracting");
+    assert_eq!(region(0.02), 2, "spool at +0.01: extending");
+}

@@ -106,7 +106,7 @@ impl Params {
             return Err(relation(
                 "valve.dead_zone",
                 v.dead_zone,
-                "must be ≤ 0.5 − |valve.null_offset| (the hold band null ± dead zone must leave half the spool travel metering) =",
+                "must be ≤ 0.5 − |valve.null_offset| (the hold band −null ± dead zone must leave half the spool travel metering) =",
                 room,
                 "",
             ));

@@ -230,17 +230,7 @@ impl CommandAgreement {
             }
             Some(_) => {}
         }
-        let opening = u - self.null_offset;
-        let margin = self.dead_zone + DIRECTION_MARGIN;
-        let region = if opening.abs() <= self.dead_zone {
-            CommandRegion::Closed
-        } else if opening > margin {
-            CommandRegion::Extend
-        } else if opening < -margin {
-            CommandRegion::Retract
-        } else {
-            CommandRegion::Between
-        };
+        let region = CommandRegion::of(u, self.dead_zone, self.null_offset);
         if region == self.region {
             self.region_s = Real::min(self.region_s + dt_s, COMMAND_SETTLE_S);
         } else {
@@ -301,6 +291,24 @@ enum CommandRegion {
     Retract,
     /// Open, but too little to name a direction.
     Between,
+}
+
+impl CommandRegion {
+    /// Where command `u` puts the spool of a valve with `dead_zone` and
+    /// `null_offset` (the spool at zero command; fractions of travel).
+    fn of(u: f32, dead_zone: f32, null_offset: f32) -> Self {
+        let spool = u + null_offset;
+        let margin = dead_zone + DIRECTION_MARGIN;
+        if spool.abs() <= dead_zone {
+            Self::Closed
+        } else if spool > margin {
+            Self::Extend
+        } else if spool < -margin {
+            Self::Retract
+        } else {
+            Self::Between
+        }
+    }
 }
 
 #[cfg(test)]
@@ -461,6 +469,17 @@ mod tests {
             contradicted += r.contradicted as u32;
         }
         assert!(contradicted > 1_000, "{contradicted}");
+    }
+
+    #[test]
+    fn the_command_region_is_where_command_plus_null_offset_puts_the_spool() {
+        // Null offset −0.06 (beyond dead zone and margin): a zero command
+        // already retracts, and +0.06 centres the spool.
+        let of = |u| CommandRegion::of(u, 0.005, -0.06);
+        assert_eq!(of(0.06), CommandRegion::Closed);
+        assert_eq!(of(0.0), CommandRegion::Retract);
+        assert_eq!(of(0.13), CommandRegion::Extend);
+        assert_eq!(of(0.03), CommandRegion::Between);
     }
 
     #[test]
