@@ -372,6 +372,25 @@ fn a_valve_whose_edges_are_fitted_before_null_gets_the_null_region() {
 }
 
 #[test]
+fn the_valve_null_is_centred_on_the_holds_when_the_moves_misplace_it() {
+    // Development rig 4 (100 bar, 40 °C): the moves' regressions put the
+    // edges at u = −0.0166 / −0.0009 (an underlap, taken as the smallest
+    // dead zone around their middle, u = −0.0087), so the piston's holds
+    // (u ≈ −0.0017) sat outside the dead zone: the model metered flow at
+    // every hold.
+    let cal = calibrated(4, 100.0, 40.0);
+    assert_warns(&cal, |w| w.starts_with("valve null moved"));
+    let v = &cal.params.valve;
+    let hold_u = -0.0017;
+    assert!(
+        (hold_u + v.null_offset).abs() < v.dead_zone,
+        "null {} dead zone {}",
+        v.null_offset,
+        v.dead_zone
+    );
+}
+
+#[test]
 fn a_piston_that_moves_both_ways_but_never_steadily_is_calibrated_partially() {
     // Development rig 1 (100 bar, 25 °C): breakaway friction 1.6 × the
     // Coulomb force, and its position loop stick-slips and hunts: 0.7 s

@@ -310,13 +310,28 @@ pub fn fit_valve(
             } else {
                 fitted_dz
             };
+            // At rest the valve passes no net flow, so the spool is where
+            // the edges are covered: holds outside the fitted band mean the
+            // moves' straight lines misplace the null, and the model would
+            // meter flow at every hold.
+            let (null, held) = match hold_command(d) {
+                Some(u) if (u + null).abs() > dz => {
+                    warnings.push(format!(
+                        "valve null moved from {null:+.4} to {:+.4}: the piston holds at u = {u:+.4}, outside the dead zone of the edges fitted from the moves (u = {e_ext:+.4} / {:+.4}); the dead zone is centred on the holds",
+                        -u,
+                        -e_ret
+                    ));
+                    (-u, format!("; centred on the holds at u = {u:+.4}"))
+                }
+                _ => (null, String::new()),
+            };
             if (0.0..0.08).contains(&dz) && null.abs() < 0.03 {
                 p.valve.dead_zone = dz;
                 p.valve.null_offset = null;
                 fits.push(Fit {
                     what: "valve dead zone and null".into(),
                     value: format!("dead zone {dz:.4}, null {null:+.4} (fraction of travel)"),
-                    quality: format!("edges at u = {e_ext:+.4} / {:+.4}", -e_ret),
+                    quality: format!("edges at u = {e_ext:+.4} / {:+.4}{held}", -e_ret),
                 });
             } else {
                 q.problems.push(format!(
@@ -328,6 +343,33 @@ pub fn fit_valve(
             "valve dead zone and null need moves at several speeds in both directions; kept".into(),
         ),
     }
+}
+
+/// Least time at rest, s, for [`hold_command`] to place the null.
+const MIN_HOLD_COMMAND_S: f64 = 2.0;
+
+/// The median valve command while the piston rests with steady chamber
+/// pressures, if it rests for [`MIN_HOLD_COMMAND_S`] or more.
+pub fn hold_command(d: &Prepared) -> Option<f64> {
+    let still = MIN_SPEED / 3.0;
+    let span = 6 * HALF_WINDOW;
+    let n = d.u.len();
+    let mut u: Vec<f64> = (span..n.saturating_sub(span))
+        .step_by(STRIDE)
+        .filter(|&i| {
+            [i - span, i, i + span]
+                .iter()
+                .all(|&j| d.v[j].abs() < still)
+                && chamber_pressure_change(&d.p3, &d.p4, i, span) < SETTLED.pressure_bar
+                && d.u[i].is_finite()
+        })
+        .map(|i| d.u[i])
+        .collect();
+    if (u.len() as f64) * d.stride_s < MIN_HOLD_COMMAND_S {
+        return None;
+    }
+    u.sort_by(f64::total_cmp);
+    Some(u[u.len() / 2])
 }
 
 /// Fit the load (gravity and moving-mass scale) and friction.

@@ -154,3 +154,36 @@ fn holds_count_for_the_edge_fit_up_to_where_the_model_starts_to_meter() {
     let corner = hold(dz - 0.5 * OPENING_ROUNDING);
     assert_eq!(corner.hold_s, 0.0);
 }
+
+#[test]
+fn the_hold_command_is_the_median_command_at_rest() {
+    // 3 s at rest with the command hunting around +0.012, then 1 s moving.
+    let recording: Vec<Sample> = (0..4000)
+        .map(|ms| {
+            let t = ms as f64 * 1e-3;
+            let moving = t >= 3.0;
+            Sample {
+                t_s: t,
+                p_supply_bar: Some(100.0),
+                p_piston_bar: Some(55.0),
+                p_rod_bar: Some(40.0),
+                p_tank_bar: Some(1.0),
+                x_piston_m: Some(if moving {
+                    0.08 + 0.05 * (t - 3.0)
+                } else {
+                    0.08
+                } as f32),
+                u_valve: Some(if moving {
+                    0.2
+                } else {
+                    0.012 + 0.001 * (40.0 * t).sin()
+                } as f32),
+                temp_oil_c: None,
+            }
+        })
+        .collect();
+    let u = hold_command(&prepare(&recording)).expect("2 s or more at rest");
+    assert!((u - 0.012).abs() < 5e-4, "{u}");
+    // Less than 2 s at rest places nothing.
+    assert_eq!(hold_command(&prepare(&recording[1500..])), None);
+}
