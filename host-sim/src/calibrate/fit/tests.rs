@@ -94,30 +94,48 @@ fn the_valve_fit_counts_the_oil_compressed_while_the_pressures_move() {
     assert!((uncorrected - 1.05).abs() > 1e-3, "{uncorrected}");
 }
 
+/// A 1 kHz recording of `ms` samples at 100 bar supply and 1 bar tank,
+/// chamber pressures `p_piston` / `p_rod` (bar), the position and
+/// command given per sample index.
+fn recording(
+    ms: usize,
+    [p_piston, p_rod]: [f32; 2],
+    x_m: impl Fn(usize) -> f32,
+    u: impl Fn(usize) -> f32,
+) -> Vec<Sample> {
+    (0..ms)
+        .map(|i| Sample {
+            t_s: i as f64 * 1e-3,
+            p_supply_bar: Some(100.0),
+            p_piston_bar: Some(p_piston),
+            p_rod_bar: Some(p_rod),
+            p_tank_bar: Some(1.0),
+            x_piston_m: Some(x_m(i)),
+            u_valve: Some(u(i)),
+            temp_oil_c: None,
+        })
+        .collect()
+}
+
 #[test]
 fn a_stick_slipping_piston_moves_without_moving_steadily() {
     // 2 s out, then 2 s in, 1 mm every 80 ms (stuck 70 ms, slipping 10):
     // 12.5 mm/s on average, never at one speed for 0.2 s.
-    let x_at = |t_ms: i64| {
-        let slips = |ms: i64| (ms / 80) as f32 * 0.001;
+    let x_at = |t_ms: usize| {
+        let slips = |ms: usize| (ms / 80) as f32 * 0.001;
         if t_ms < 2000 {
             0.05 + slips(t_ms)
         } else {
             0.05 + slips(2000) - slips(t_ms - 2000)
         }
     };
-    let recording: Vec<Sample> = (0..4000)
-        .map(|ms| Sample {
-            t_s: ms as f64 * 1e-3,
-            p_supply_bar: Some(100.0),
-            p_piston_bar: Some(50.0),
-            p_rod_bar: Some(45.0),
-            p_tank_bar: Some(1.0),
-            x_piston_m: Some(x_at(ms)),
-            u_valve: Some(if ms < 2000 { 0.05 } else { -0.05 }),
-            temp_oil_c: None,
-        })
-        .collect();
+    let recording = recording(4000, [50.0, 45.0], x_at, |ms| {
+        if ms < 2000 {
+            0.05
+        } else {
+            -0.05
+        }
+    });
     let m = Motion::of(&prepare(&recording));
     // A few samples at the top of each slip look steady, far from the
     // 1.5 s per direction a valve fit needs.
@@ -130,18 +148,8 @@ fn holds_count_for_the_edge_fit_up_to_where_the_model_starts_to_meter() {
     // A 2 s hold with the spool `xv` from null, the pressures steady.
     let p = Params::nominal();
     let hold = |xv: f64| -> EdgeHolds {
-        let recording: Vec<Sample> = (0..2000)
-            .map(|ms| Sample {
-                t_s: ms as f64 * 1e-3,
-                p_supply_bar: Some(100.0),
-                p_piston_bar: Some(55.0),
-                p_rod_bar: Some(40.0),
-                p_tank_bar: Some(1.0),
-                x_piston_m: Some(0.08),
-                u_valve: Some((xv - p.valve.null_offset) as f32),
-                temp_oil_c: None,
-            })
-            .collect();
+        let u = (xv - p.valve.null_offset) as f32;
+        let recording = recording(2000, [55.0, 40.0], |_| 0.08, |_| u);
         EdgeHolds::of(&prepare(&recording), &p)
     };
     let dz = p.valve.dead_zone;
@@ -158,30 +166,19 @@ fn holds_count_for_the_edge_fit_up_to_where_the_model_starts_to_meter() {
 #[test]
 fn the_hold_command_is_the_median_command_at_rest() {
     // 3 s at rest with the command hunting around +0.012, then 1 s moving.
-    let recording: Vec<Sample> = (0..4000)
-        .map(|ms| {
-            let t = ms as f64 * 1e-3;
-            let moving = t >= 3.0;
-            Sample {
-                t_s: t,
-                p_supply_bar: Some(100.0),
-                p_piston_bar: Some(55.0),
-                p_rod_bar: Some(40.0),
-                p_tank_bar: Some(1.0),
-                x_piston_m: Some(if moving {
-                    0.08 + 0.05 * (t - 3.0)
-                } else {
-                    0.08
-                } as f32),
-                u_valve: Some(if moving {
-                    0.2
-                } else {
-                    0.012 + 0.001 * (40.0 * t).sin()
-                } as f32),
-                temp_oil_c: None,
+    let t = |ms: usize| ms as f32 * 1e-3;
+    let recording = recording(
+        4000,
+        [55.0, 40.0],
+        |ms| 0.08 + 0.05 * (t(ms) - 3.0).max(0.0),
+        |ms| {
+            if t(ms) >= 3.0 {
+                0.2
+            } else {
+                0.012 + 0.001 * (40.0 * t(ms)).sin()
             }
-        })
-        .collect();
+        },
+    );
     let u = hold_command(&prepare(&recording)).expect("2 s or more at rest");
     assert!((u - 0.012).abs() < 5e-4, "{u}");
     // Less than 2 s at rest places nothing.
