@@ -636,7 +636,11 @@ mod tests {
             let mut out = outputs(internal_lpm);
             for (h, o) in Hypothesis::ALL.into_iter().zip(out.iter_mut().flatten()) {
                 o.flow_external_lpm = 0.8;
-                o.log_likelihood = if h == Hypothesis::Internal { 0.0 } else { -50.0 };
+                o.log_likelihood = if h == Hypothesis::Internal {
+                    0.0
+                } else {
+                    -50.0
+                };
             }
             let mut d: Decision<f64> = Decision::new(&Params::nominal());
             let mut events = Events::new();
