@@ -367,3 +367,42 @@ fn healthy_laminar_leakage_never_estimated_below_its_floor() {
     assert!(lowest >= -0.5, "{lowest}");
     assert_eq!(f.ekf.x[LAMINAR], -0.5, "the readings do push it down");
 }
+
+#[test]
+fn no_internal_leak_flow_is_claimed_while_the_chamber_pressures_are_equal() {
+    // An internal-leak filter at a hold whose coefficient reads 3 l/min
+    // per 10 bar (and is uncertain): what it reports, and what the
+    // decision alarms on, is the flow θ·|p3 − p4| / 10 bar with its 1σ.
+    let run = |p4_bar_below_p3: f64| {
+        let mut s = setting::<f64>(false);
+        s.s0[P4] = s.s0[P3] - p4_bar_below_p3 * BAR / 1e7;
+        let p0 = [1e-3; NB];
+        let mut f = HypothesisFilter::<f64, { NB + 1 }>::new(Hypothesis::Internal, &s.s0, &p0, 1.0);
+        let (Some(i), None) = leak_indices::<{ NB + 1 }>(Hypothesis::Internal) else {
+            panic!("the internal filter has one leak state")
+        };
+        f.ekf.x[i] = 3.0;
+        let m = Measurement {
+            z: [f.ekf.x[XP], f.ekf.x[P3], f.ekf.x[P4]],
+            r: s.r,
+        };
+        let q = s.noise.variances(s.ctx.step.dt);
+        f.step(&s.plant, &s.ctx, &q, &m).expect("a filter step")
+    };
+    // Equal pressures: the leak path carries nothing, whatever θ reads,
+    // and neither does its uncertainty: no internal-leak claim.
+    let equal = run(0.0);
+    assert!(
+        equal.flow_internal_lpm.abs() < 0.02,
+        "{}",
+        equal.flow_internal_lpm
+    );
+    assert!(
+        equal.flow_internal_sd_lpm < 0.02,
+        "{}",
+        equal.flow_internal_sd_lpm
+    );
+    // 8 bar across the piston: the same coefficient is a 2.4 l/min leak.
+    let apart = run(8.0);
+    assert!(apart.flow_internal_lpm > 2.0, "{}", apart.flow_internal_lpm);
+}
