@@ -348,22 +348,29 @@ pub fn fit_valve(
 /// Least time at rest, s, for [`hold_command`] to place the null.
 const MIN_HOLD_COMMAND_S: f64 = 2.0;
 
+/// Samples either side of a hold sample that must be at rest too.
+const REST_SPAN: usize = 6 * HALF_WINDOW;
+
+/// The samples of `d` (one per `STRIDE`) at a settled hold: the piston at
+/// rest over ±`REST_SPAN` and the chamber pressures steady.
+fn resting(d: &Prepared) -> impl Iterator<Item = usize> + '_ {
+    let still = MIN_SPEED / 3.0;
+    (REST_SPAN..d.u.len().saturating_sub(REST_SPAN))
+        .step_by(STRIDE)
+        .filter(move |&i| {
+            [i - REST_SPAN, i, i + REST_SPAN]
+                .iter()
+                .all(|&j| d.v[j].abs() < still)
+                && chamber_pressure_change(&d.p3, &d.p4, i, REST_SPAN) < SETTLED.pressure_bar
+        })
+}
+
 /// The median valve command while the piston rests with steady chamber
 /// pressures, if it rests for [`MIN_HOLD_COMMAND_S`] or more.
 pub fn hold_command(d: &Prepared) -> Option<f64> {
-    let still = MIN_SPEED / 3.0;
-    let span = 6 * HALF_WINDOW;
-    let n = d.u.len();
-    let mut u: Vec<f64> = (span..n.saturating_sub(span))
-        .step_by(STRIDE)
-        .filter(|&i| {
-            [i - span, i, i + span]
-                .iter()
-                .all(|&j| d.v[j].abs() < still)
-                && chamber_pressure_change(&d.p3, &d.p4, i, span) < SETTLED.pressure_bar
-                && d.u[i].is_finite()
-        })
+    let mut u: Vec<f64> = resting(d)
         .map(|i| d.u[i])
+        .filter(|u| u.is_finite())
         .collect();
     if (u.len() as f64) * d.stride_s < MIN_HOLD_COMMAND_S {
         return None;
@@ -509,23 +516,16 @@ impl EdgeHolds {
         let flows = Continuity::of(p);
         // Covered: short of where the model's opening starts to round.
         let covered = v.dead_zone - OPENING_ROUNDING;
-        let still = MIN_SPEED / 3.0;
-        let span = 6 * HALF_WINDOW;
-        let n = d.p2.len();
         let mut rows = Vec::new();
         if flows.k_edge > 0.0 && covered > 0.0 {
-            for i in (span..n.saturating_sub(span)).step_by(STRIDE) {
+            for i in resting(d) {
                 let vals = [d.p2[i], d.p3[i], d.p4[i], d.p5[i], d.u[i], d.v[i]];
                 if !vals.iter().all(|x| x.is_finite()) {
                     continue;
                 }
                 let xv = d.u[i] + v.null_offset;
-                let at_rest = [i - span, i, i + span]
-                    .iter()
-                    .all(|&j| d.v[j].abs() < still);
-                let steady = chamber_pressure_change(&d.p3, &d.p4, i, span) < SETTLED.pressure_bar;
                 let (p2, p3, p4, p5) = (d.p2[i] * BAR, d.p3[i] * BAR, d.p4[i] * BAR, d.p5[i] * BAR);
-                if !(at_rest && steady && xv.abs() < covered && p2 - p5 > 5.0 * BAR) {
+                if !(xv.abs() < covered && p2 - p5 > 5.0 * BAR) {
                     continue;
                 }
                 // At a hold the metering edges are covered: what continuity
