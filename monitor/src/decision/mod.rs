@@ -656,6 +656,32 @@ mod tests {
     }
 
     #[test]
+    fn a_filter_that_resets_makes_the_verdict_inconclusive_for_a_warm_up() {
+        let p = Params::nominal();
+        let mut d: Decision<f64> = Decision::new(&p);
+        let mut events = Events::new();
+        let mut t = 0.0;
+        let mut run = |d: &mut Decision<f64>, out: &[Option<FilterOutput<f64>>; 4], secs: f64| {
+            for _ in 0..(secs * 1000.0) as usize {
+                t += 0.001;
+                d.update(out, 0.001, 1.0, true, 1, t, &mut events);
+            }
+        };
+        run(&mut d, &outputs(0.0), 5.0);
+        assert!(d.conclusive(), "5 s of healthy evidence");
+        // One filter restarts (numerical failure): no claim until the bank
+        // has run a warm-up's length without another restart.
+        let mut reset = outputs(0.0);
+        reset[Hypothesis::External as usize] = None;
+        run(&mut d, &reset, 0.001);
+        assert!(!d.conclusive());
+        run(&mut d, &outputs(0.0), 0.9 * p.filter.warm_up_s);
+        assert!(!d.conclusive());
+        run(&mut d, &outputs(0.0), 0.2 * p.filter.warm_up_s);
+        assert!(d.conclusive());
+    }
+
+    #[test]
     fn a_provisional_set_is_never_conclusive_and_alarms_on_gross_leaks_only() {
         let p = Params::provisional();
         let gross = p.baseline.provisional_floor_lpm;
