@@ -26,6 +26,8 @@
 #[cfg(feature = "serde")]
 use serde::{Deserialize, Serialize};
 
+use crate::physics::valve::command_for;
+
 #[macro_use]
 mod macros;
 mod bounds;
@@ -561,8 +563,8 @@ impl Params {
     pub fn hold_band(&self) -> (f32, f32) {
         let v = &self.valve;
         (
-            (-v.null_offset - v.dead_zone) as f32,
-            (-v.null_offset + v.dead_zone) as f32,
+            command_for(-v.dead_zone, v.null_offset) as f32,
+            command_for(v.dead_zone, v.null_offset) as f32,
         )
     }
 

@@ -25,6 +25,22 @@ pub fn orifice<T: Real>(dp: T, delta: T, sqrt_delta: T) -> (T, T) {
     }
 }
 
+/// Spool position (fraction of travel) that valve command `u` gives a
+/// valve whose spool sits at `null_offset` at zero command. The one
+/// statement of that convention: the model, the input checks, the
+/// operating regions and calibration all place the spool with it.
+#[inline(always)]
+pub fn spool_at<T: Real>(u: T, null_offset: T) -> T {
+    u + null_offset
+}
+
+/// The valve command that puts the spool at `spool`: [`spool_at`]'s
+/// inverse.
+#[inline(always)]
+pub fn command_for<T: Real>(spool: T, null_offset: T) -> T {
+    spool - null_offset
+}
+
 /// Half-width of the rounded corner of the spool opening, fraction of
 /// travel: an edge starts to meter this far before the dead zone ends.
 pub const OPENING_ROUNDING: f64 = 0.002;

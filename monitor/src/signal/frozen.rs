@@ -37,6 +37,7 @@
 //! pressure are steady by design and the valve command may legitimately be
 //! constant: they are not tested.
 
+use crate::physics::valve::spool_at;
 use crate::sample::{Channel, Sample};
 
 /// Rest time (valve not feeding) in completed runs before the noise-based
@@ -148,7 +149,7 @@ impl FrozenDetector {
     /// Whether the valve feeds the piston: open beyond the dead zone, a
     /// pressure drop across the feeding edge, away from the end stops.
     fn feeding(&self, r: &Readings) -> bool {
-        let spool = r.u_valve + self.cfg.null_offset;
+        let spool = spool_at(r.u_valve, self.cfg.null_offset);
         let opening = spool.abs() - self.cfg.dead_zone;
         // Extending feeds the piston chamber, retracting the rod chamber.
         let drop = r.p_supply_bar

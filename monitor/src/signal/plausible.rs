@@ -40,6 +40,7 @@
 //! constant zero command reads as a sensor fault, never as a leak from an
 //! untrusted command).
 
+use crate::physics::valve::spool_at;
 use crate::real::Real;
 
 /// Fastest plausible piston speed, m/s (the rig moves at ≤ 0.2 m/s).
@@ -297,7 +298,7 @@ impl CommandRegion {
     /// Where command `u` puts the spool of a valve with `dead_zone` and
     /// `null_offset` (the spool at zero command; fractions of travel).
     fn of(u: f32, dead_zone: f32, null_offset: f32) -> Self {
-        let spool = u + null_offset;
+        let spool = spool_at(u, null_offset);
         let margin = dead_zone + DIRECTION_MARGIN;
         if spool.abs() <= dead_zone {
             Self::Closed

@@ -6,7 +6,7 @@ use monitor::physics::fluid::bulk_modulus_exact;
 use monitor::physics::friction::stribeck_decay;
 use monitor::physics::load::load_terms_exact;
 use monitor::physics::units::{BAR, LPM_PER_M3S};
-use monitor::physics::valve::{orifice, OPENING_ROUNDING};
+use monitor::physics::valve::{command_for, orifice, spool_at, OPENING_ROUNDING};
 use monitor::Params;
 
 /// Samples each side of the centre for smoothing/differentiation.
@@ -181,10 +181,8 @@ pub fn fit_valve(
     // Each direction: y = Kv·(±u − edge): slope Kv, edge = −a/b. The
     // edges of the starting parameters, in ±u: extend opens at dz − null,
     // retract (in −u) at dz + null.
-    let start_edges = [
-        p.valve.dead_zone - p.valve.null_offset,
-        p.valve.dead_zone + p.valve.null_offset,
-    ];
+    let (dz, null) = (p.valve.dead_zone, p.valve.null_offset);
+    let start_edges = [command_for(dz, null), -command_for(-dz, null)];
     let spreads = {
         let m = Motion::of(d);
         [m.extend_spread, m.retract_spread]
@@ -315,7 +313,7 @@ pub fn fit_valve(
             // moves' straight lines misplace the null, and the model would
             // meter flow at every hold.
             let (null, held) = match hold_command(d) {
-                Some(u) if (u + null).abs() > dz => {
+                Some(u) if spool_at(u, null).abs() > dz => {
                     warnings.push(format!(
                         "valve null moved from {null:+.4} to {:+.4}: the piston holds at u = {u:+.4}, outside the dead zone of the edges fitted from the moves (u = {e_ext:+.4} / {:+.4}); the dead zone is centred on the holds",
                         -u,
@@ -523,7 +521,7 @@ impl EdgeHolds {
                 if !vals.iter().all(|x| x.is_finite()) {
                     continue;
                 }
-                let xv = d.u[i] + v.null_offset;
+                let xv = spool_at(d.u[i], v.null_offset);
                 let (p2, p3, p4, p5) = (d.p2[i] * BAR, d.p3[i] * BAR, d.p4[i] * BAR, d.p5[i] * BAR);
                 if !(xv.abs() < covered && p2 - p5 > 5.0 * BAR) {
                     continue;

@@ -34,7 +34,7 @@ use crate::physics::fluid::BulkModulusTable;
 pub use crate::physics::friction::stribeck_decay;
 use crate::physics::load::LoadTable;
 pub use crate::physics::units::{BAR, LEAK_UNIT, LPM_PER_M3S};
-use crate::physics::valve::{opening, orifice, SpoolStep, OPENING_ROUNDING};
+use crate::physics::valve::{opening, orifice, spool_at, SpoolStep, OPENING_ROUNDING};
 use crate::real::Real;
 
 mod jacobian;
@@ -204,7 +204,7 @@ impl<T: Real> Plant<T> {
     /// Spool command including the valve's null bias.
     #[inline]
     pub fn spool_command(&self, u_valve: T) -> T {
-        u_valve + self.null_offset
+        spool_at(u_valve, self.null_offset)
     }
 
     /// Friction force (N) and its slope dF/dv (N·s/m) at velocity `v` (m/s).
