@@ -41,7 +41,7 @@ const MOVE_SPEED: f64 = 0.003;
 const MID_MOVE_S: f64 = 0.3;
 /// Shortest still interval that counts as a hold, s.
 const MIN_HOLD_S: f64 = 5.0;
-/// Size error is measured against the true flow over this last span, s.
+/// The span of [`TruthSummary::last_lpm`], s.
 pub const SIZE_SPAN_S: f64 = 4.0;
 
 /// How to execute a plan.
@@ -126,7 +126,8 @@ pub struct Alarm {
 pub struct TruthSummary {
     /// Length, s.
     pub duration_s: f64,
-    /// Mean true internal / external flow over the last 4 s, l/min.
+    /// Mean true internal / external flow over the last 4 s, l/min, in the
+    /// run JSON for comparison (the size error uses `size_lpm`).
     pub last_lpm: [f64; 2],
     /// The true flows at the end averaged as the monitor averages the
     /// size it reports (exponentially over `filter.evidence_window_s`),
