@@ -144,7 +144,9 @@ pub(super) fn fit_plant(
             let mut valve = p.clone();
             let mut q = Quality::default();
             let mut f = Vec::new();
-            fit::fit_valve(&d, &mut valve, &mut f, &mut warnings, &mut q);
+            // Its warnings describe the fit, said only if it is used.
+            let mut w = Vec::new();
+            fit::fit_valve(&d, &mut valve, &mut f, &mut w, &mut q);
             let r2_ok = q
                 .valve_r2
                 .iter()
@@ -158,6 +160,7 @@ pub(super) fn fit_plant(
             if q.problems.is_empty() && r2_ok && res_ok {
                 p.valve = valve.valve;
                 fits.extend(f);
+                warnings.extend(w);
             } else {
                 warnings.push(format!(
                     "valve not fitted (kept): {}",
@@ -168,6 +171,7 @@ pub(super) fn fit_plant(
                         .collect::<Vec<_>>()
                         .join("; ")
                 ));
+                fit::centre_null_on_holds(&d, &mut p, &mut fits, &mut warnings);
             }
             let mut load = p.clone();
             let mut ql = Quality::default();
@@ -187,7 +191,9 @@ pub(super) fn fit_plant(
             quality.valve_r2 = q.valve_r2;
             quality.valve_rel_residual = q.valve_rel_residual;
         }
-        Mechanics::Kept => {}
+        Mechanics::Kept => {
+            fit::centre_null_on_holds(&d, &mut p, &mut fits, &mut warnings);
+        }
     }
     let done = |p, fits, warnings, quality, baseline_notes| {
         Ok(PlantFit {

@@ -323,7 +323,7 @@ pub fn fit_valve(
                 }
                 _ => (null, String::new()),
             };
-            if (0.0..0.08).contains(&dz) && null.abs() < 0.03 {
+            if (0.0..0.08).contains(&dz) && null.abs() < MAX_NULL {
                 p.valve.dead_zone = dz;
                 p.valve.null_offset = null;
                 fits.push(Fit {
@@ -333,7 +333,7 @@ pub fn fit_valve(
                 });
             } else {
                 q.problems.push(format!(
-                    "valve dead zone {dz:.4} / null {null:+.4} implausible (−{MAX_UNDERLAP}–0.08 / ±0.03 expected)"
+                    "valve dead zone {dz:.4} / null {null:+.4} implausible (−{MAX_UNDERLAP}–0.08 / ±{MAX_NULL} expected)"
                 ));
             }
         }
@@ -342,6 +342,9 @@ pub fn fit_valve(
         ),
     }
 }
+
+/// Largest plausible valve null offset, fraction of travel.
+const MAX_NULL: f64 = 0.03;
 
 /// Least time at rest, s, for [`hold_command`] to place the null.
 const MIN_HOLD_COMMAND_S: f64 = 2.0;
@@ -375,6 +378,39 @@ pub fn hold_command(d: &Prepared) -> Option<f64> {
     }
     u.sort_by(f64::total_cmp);
     Some(u[u.len() / 2])
+}
+
+/// With the valve otherwise kept (a partial calibration), place its null
+/// where the piston holds: at rest the valve passes no net flow, so the
+/// hold command must sit inside the dead zone, or the model meters flow
+/// at every hold and weighs none of it as evidence. Needs only
+/// [`MIN_HOLD_COMMAND_S`] at rest, not the moves the edges need. Returns
+/// whether the null moved.
+pub fn centre_null_on_holds(
+    d: &Prepared,
+    p: &mut Params,
+    fits: &mut Vec<Fit>,
+    warnings: &mut Vec<String>,
+) -> bool {
+    let v = &p.valve;
+    let (old, dz) = (v.null_offset, v.dead_zone);
+    match hold_command(d) {
+        // Inside the plausible range the full fit allows.
+        Some(u) if spool_at(u, old).abs() > dz && u.abs() < MAX_NULL => {
+            p.valve.null_offset = -u;
+            warnings.push(format!(
+                "valve null moved from {old:+.4} to {:+.4} with the rest of the valve kept: the piston holds at u = {u:+.4}, outside the kept dead zone ±{dz:.4} around the null",
+                -u
+            ));
+            fits.push(Fit {
+                what: "valve null (from the holds)".into(),
+                value: format!("null {:+.4} (fraction of travel)", -u),
+                quality: format!("median command at rest, dead zone {dz:.4} kept"),
+            });
+            true
+        }
+        _ => false,
+    }
 }
 
 /// Fit the load (gravity and moving-mass scale) and friction.

@@ -184,3 +184,41 @@ fn the_hold_command_is_the_median_command_at_rest() {
     // Less than 2 s at rest places nothing.
     assert_eq!(hold_command(&prepare(&recording[1500..])), None);
 }
+
+#[test]
+fn a_kept_valve_has_its_null_moved_to_where_the_piston_holds() {
+    // 3 s at rest at u = +0.024, outside the kept dead zone around null 0.
+    let rec = recording(3000, [55.0, 40.0], |_| 0.08, |_| 0.024);
+    let d = prepare(&rec);
+    let mut p = Params::nominal();
+    p.valve.null_offset = 0.0;
+    p.valve.dead_zone = 0.01;
+    let (mut fits, mut warnings) = (Vec::new(), Vec::new());
+    assert!(centre_null_on_holds(&d, &mut p, &mut fits, &mut warnings));
+    assert!(
+        (p.valve.null_offset + 0.024).abs() < 1e-6,
+        "{}",
+        p.valve.null_offset
+    );
+    // The rest of the valve is kept, and the move is said.
+    assert_eq!(p.valve.dead_zone, 0.01);
+    assert_eq!(fits.len(), 1);
+    assert!(warnings[0].contains("valve null moved"), "{warnings:?}");
+    // Holds already inside the dead zone leave it where it is.
+    let mut q = Params::nominal();
+    q.valve.null_offset = -0.02;
+    q.valve.dead_zone = 0.01;
+    assert!(!centre_null_on_holds(&d, &mut q, &mut fits, &mut warnings));
+    assert_eq!(q.valve.null_offset, -0.02);
+    // An implausible null is not taken.
+    let far = recording(3000, [55.0, 40.0], |_| 0.08, |_| 0.05);
+    let mut r = Params::nominal();
+    r.valve.null_offset = 0.0;
+    assert!(!centre_null_on_holds(
+        &prepare(&far),
+        &mut r,
+        &mut fits,
+        &mut warnings
+    ));
+    assert_eq!(r.valve.null_offset, 0.0);
+}
