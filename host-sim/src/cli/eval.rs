@@ -9,7 +9,8 @@ use std::process::ExitCode;
 #[derive(clap::Args)]
 pub struct Args {
     /// Rig set: the development rigs, the held-out rigs (fixed in
-    /// advance; report only, never tune on them), or both.
+    /// advance; report only, never tune on them), both, or the further
+    /// development rigs (more of the population to find failures on).
     #[arg(long, value_enum, default_value_t = SetChoice::Dev)]
     set: SetChoice,
     /// Only the first N rigs of each set.

@@ -38,6 +38,14 @@ pub const HOLDOUT_RIGS: [u64; 12] = [
     1001, 1002, 1003, 1004, 1005, 1006, 1007, 1008, 1009, 1010, 1011, 1012,
 ];
 
+/// Further development rigs: more of the population the development rigs
+/// come from, to find failures on (tuned on like them; reported
+/// separately so that the fixed sets' figures stay comparable). Disjoint
+/// from [`DEV_RIGS`] and [`HOLDOUT_RIGS`].
+pub const WIDE_RIGS: [u64; 24] = [
+    7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 28, 29, 30,
+];
+
 /// A set of rigs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -46,6 +54,8 @@ pub enum RigSet {
     Dev,
     /// [`HOLDOUT_RIGS`].
     Holdout,
+    /// [`WIDE_RIGS`].
+    Wide,
 }
 
 impl RigSet {
@@ -54,6 +64,7 @@ impl RigSet {
         match self {
             Self::Dev => &DEV_RIGS,
             Self::Holdout => &HOLDOUT_RIGS,
+            Self::Wide => &WIDE_RIGS,
         }
     }
 
@@ -62,6 +73,7 @@ impl RigSet {
         match self {
             Self::Dev => "dev",
             Self::Holdout => "holdout",
+            Self::Wide => "wide",
         }
     }
 }
@@ -75,6 +87,8 @@ pub enum SetChoice {
     Holdout,
     /// Both, reported separately.
     Both,
+    /// Further development rigs (seeds 7–30), to find failures on.
+    Wide,
 }
 
 impl SetChoice {
@@ -84,6 +98,7 @@ impl SetChoice {
             Self::Dev => vec![RigSet::Dev],
             Self::Holdout => vec![RigSet::Holdout],
             Self::Both => vec![RigSet::Dev, RigSet::Holdout],
+            Self::Wide => vec![RigSet::Wide],
         }
     }
 }
