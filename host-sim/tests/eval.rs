@@ -5,7 +5,7 @@ use host_sim::eval::exec::{self, Alarm, TruthSummary};
 use host_sim::eval::report::{self, Target};
 use host_sim::eval::{
     self, plan, Category, Cell, ExecConfig, FaultKind, PlanConfig, RigSet, RunResult, RunSpec,
-    DEV_RIGS, HOLDOUT_RIGS,
+    DEV_RIGS, HOLDOUT_RIGS, WIDE_RIGS,
 };
 use monitor::Params;
 use std::time::Instant;
@@ -367,6 +367,26 @@ fn leak_targets_use_medians_per_kind_and_size() {
 fn holdout_rigs_never_appear_in_a_dev_run() {
     for &h in &HOLDOUT_RIGS {
         assert!(!DEV_RIGS.contains(&h));
+        assert!(!WIDE_RIGS.contains(&h));
+    }
+    for &w in &WIDE_RIGS {
+        assert!(!DEV_RIGS.contains(&w));
+    }
+    // The further development rigs: their own set, one cell each with
+    // `--quick`, never a held-out seed.
+    let wide = plan(&PlanConfig {
+        sets: vec![RigSet::Wide],
+        quick: true,
+        ..Default::default()
+    });
+    assert_eq!(wide.cells.len(), WIDE_RIGS.len());
+    for s in wide
+        .specs()
+        .chain(wide.cells.iter().map(|c| &c.calibration))
+    {
+        assert_eq!(s.cell.set, RigSet::Wide, "{}", s.id);
+        assert!(WIDE_RIGS.contains(&s.cell.rig), "{}", s.id);
+        assert!(s.id.starts_with("wide/"), "{}", s.id);
     }
     let dev = plan(&PlanConfig::default());
     assert_eq!(dev.cells.len(), DEV_RIGS.len() * 4);
