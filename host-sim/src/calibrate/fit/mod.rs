@@ -312,8 +312,8 @@ pub fn fit_valve(
             // the edges are covered: holds outside the fitted band mean the
             // moves' straight lines misplace the null, and the model would
             // meter flow at every hold.
-            let (null, held) = match hold_command(d) {
-                Some(u) if spool_at(u, null).abs() > dz => {
+            let (null, held) = match holds_outside(d, null, dz) {
+                Some(u) => {
                     warnings.push(format!(
                         "valve null moved from {null:+.4} to {:+.4}: the piston holds at u = {u:+.4}, outside the dead zone of the edges fitted from the moves (u = {e_ext:+.4} / {:+.4}); the dead zone is centred on the holds",
                         -u,
@@ -321,7 +321,7 @@ pub fn fit_valve(
                     ));
                     (-u, format!("; centred on the holds at u = {u:+.4}"))
                 }
-                _ => (null, String::new()),
+                None => (null, String::new()),
             };
             if (0.0..0.08).contains(&dz) && null.abs() < MAX_NULL {
                 p.valve.dead_zone = dz;
@@ -380,6 +380,13 @@ pub fn hold_command(d: &Prepared) -> Option<f64> {
     Some(u[u.len() / 2])
 }
 
+/// The hold command ([`hold_command`]) when it puts the spool outside the
+/// dead zone `dead_zone` around `null`: the piston holds where the valve
+/// model would meter flow.
+fn holds_outside(d: &Prepared, null: f64, dead_zone: f64) -> Option<f64> {
+    hold_command(d).filter(|&u| spool_at(u, null).abs() > dead_zone)
+}
+
 /// With the valve otherwise kept (a partial calibration), place its null
 /// where the piston holds: at rest the valve passes no net flow, so the
 /// hold command must sit inside the dead zone, or the model meters flow
@@ -394,9 +401,9 @@ pub fn centre_null_on_holds(
 ) -> bool {
     let v = &p.valve;
     let (old, dz) = (v.null_offset, v.dead_zone);
-    match hold_command(d) {
+    match holds_outside(d, old, dz) {
         // Inside the plausible range the full fit allows.
-        Some(u) if spool_at(u, old).abs() > dz && u.abs() < MAX_NULL => {
+        Some(u) if u.abs() < MAX_NULL => {
             p.valve.null_offset = -u;
             warnings.push(format!(
                 "valve null moved from {old:+.4} to {:+.4} with the rest of the valve kept: the piston holds at u = {u:+.4}, outside the kept dead zone ±{dz:.4} around the null",
