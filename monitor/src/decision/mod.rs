@@ -19,8 +19,8 @@
 //!    user's, raised to the installation's floor in the current operating
 //!    region; entering a region with a lower level it falls with
 //!    [`LEVEL_RELEASE_S`] (the leak states still carry the last region's
-//!    apparent value), entering a higher one it rises at once. The warning flag has
-//!    hysteresis: on at `warning_lpm`, off below 80 %
+//!    apparent value), entering a higher one it rises at once. The
+//!    warning flag has hysteresis: on at `warning_lpm`, off below 80 %
 //!    ([`WARNING_RELEASE`]) of it.
 //!
 //! 2. **Model probabilities.** Each filter's log-likelihood, tempered by the
