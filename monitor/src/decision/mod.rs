@@ -350,12 +350,11 @@ impl<T: Real> Decision<T> {
             let a_level = (dt / T::c(LEVEL_RELEASE_S)).min(T::ONE);
             for k in Leak::ALL {
                 follow(&mut self.baseline_now[k], a_base, self.baseline[k][region]);
+                // Never below the region's level: rises at once, falls
+                // with the time constant.
                 let level = self.alarm_lpm[k][region];
-                if level >= self.level_now[k] {
-                    self.level_now[k] = level;
-                } else {
-                    follow(&mut self.level_now[k], a_level, level);
-                }
+                follow(&mut self.level_now[k], a_level, level);
+                self.level_now[k] = self.level_now[k].max(level);
             }
             let flows = PerLeak::new(
                 both.flow_internal_lpm - self.baseline_now[Leak::Internal] * both.dp_10bar[0],
@@ -578,11 +577,19 @@ mod tests {
     /// Seconds until the internal leak is raised, reading `lpm` steadily
     /// in `region` (None: not within 10 s).
     fn time_to_alarm(p: &Params, lpm: f64, region: usize) -> Option<f64> {
+        time_to_alarm_reading(p, |_| (region, lpm))
+    }
+
+    /// Seconds until the internal leak is raised, `reading(t)` giving the
+    /// region and the internal leak reading (l/min) at `t` s (None: not
+    /// within 10 s).
+    fn time_to_alarm_reading(p: &Params, reading: impl Fn(f64) -> (usize, f64)) -> Option<f64> {
         let mut d: Decision<f64> = Decision::new(p);
         let mut events = Events::new();
         let dt = 0.001;
         for i in 0..10_000 {
             let t = i as f64 * dt;
+            let (region, lpm) = reading(t);
             d.update(&outputs(lpm), dt, 1.0, true, region, t, &mut events);
             if d.latched().contains(Leak::Internal) {
                 return Some(t);
@@ -618,24 +625,16 @@ mod tests {
         // ≈ 0.15 s, or stays at 1 l/min (a leak). Alarm time after the
         // region change, if any within 5 s.
         let run = |settles: bool| {
-            let mut d: Decision<f64> = Decision::new(&p);
-            let mut events = Events::new();
-            let dt = 0.001;
-            for i in 0..10_000 {
-                let t = i as f64 * dt;
-                let (region, lpm) = if t < 5.0 {
+            time_to_alarm_reading(&p, |t| {
+                if t < 5.0 {
                     (1, 1.0)
                 } else if settles {
                     (2, 0.05 + 0.95 * (-(t - 5.0) / 0.15).exp())
                 } else {
                     (2, 1.0)
-                };
-                d.update(&outputs(lpm), dt, 1.0, true, region, t, &mut events);
-                if d.latched().contains(Leak::Internal) {
-                    return Some(t - 5.0);
                 }
-            }
-            None
+            })
+            .map(|t| t - 5.0)
         };
         assert_eq!(run(true), None);
         // A reading that stays is a leak, alarmed soon after.
