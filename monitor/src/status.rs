@@ -88,7 +88,8 @@ pub struct Evidence {
 pub mod health {
     /// Filters started or restarted less than the warm-up time ago.
     pub const WARMING_UP: u16 = 1 << 0;
-    /// This sample did not count as evidence (transient, fault, warm-up).
+    /// This sample did not count as evidence (transient, fault, warm-up, a
+    /// valve gain the model cannot describe).
     pub const EVIDENCE_PAUSED: u16 = 1 << 1;
     /// A gap in the sample times re-initialised the filters.
     pub const DATA_GAP: u16 = 1 << 2;
