@@ -412,3 +412,40 @@ fn a_valve_read_back_that_changes_scale_is_refused() {
         );
     }
 }
+
+/// Share of the samples after the warm-up at which the monitor with
+/// `params` holds valve flow gains its valve model cannot describe; each
+/// such sample must count as no evidence.
+fn valve_misfit_share(samples: &[Sample], params: &Params) -> f64 {
+    let mut m: Monitor<f32> = Monitor::new(params).expect("valid parameters");
+    let (mut counted, mut misfit) = (0usize, 0usize);
+    for s in samples {
+        let st = m.step(s);
+        if st.health & health::WARMING_UP != 0 {
+            continue;
+        }
+        counted += 1;
+        if st.valve_model_misfit() {
+            misfit += 1;
+            assert_ne!(st.health & health::EVIDENCE_PAUSED, 0, "t = {}", s.t_s);
+        }
+    }
+    misfit as f64 / counted.max(1) as f64
+}
+
+#[test]
+fn a_valve_the_model_cannot_follow_counts_as_no_evidence() {
+    // The reference rig, monitored with its own valve and with one that
+    // passes half the flow (a valve nobody calibrated for).
+    let samples = healthy_run(&Rig::reference(), &SensorModel::default(), 21);
+    let right = Params::nominal();
+    let mut wrong = right.clone();
+    wrong.valve.flow_gain_extend_lpm_sqrt_bar *= 0.5;
+    wrong.valve.flow_gain_retract_lpm_sqrt_bar *= 0.5;
+    let (fits, misfits) = (
+        valve_misfit_share(&samples, &right),
+        valve_misfit_share(&samples, &wrong),
+    );
+    assert!(fits < 0.01, "own valve: {fits}");
+    assert!(misfits > 0.25, "half the flow: {misfits}");
+}

@@ -193,3 +193,13 @@ pub struct Status {
     /// Events at this sample.
     pub events: Events,
 }
+
+impl Status {
+    /// The valve flow-gain deviations are beyond what the valve model
+    /// describes (root sum of squares above 0.5, the decision layer's
+    /// limit): the monitor counts such samples as no evidence
+    /// (`EVIDENCE_PAUSED`), neither of a leak nor of health.
+    pub fn valve_model_misfit(&self) -> bool {
+        crate::decision::valve_gains_misfit(self.valve_gain_deviation)
+    }
+}

@@ -32,6 +32,10 @@ pub struct Run {
     pub detect_region_max_lpm: [[f64; 3]; 2],
     /// Fraction of the counted time with evidence weight > 0.5.
     pub evidence_fraction: f64,
+    /// Fraction of the counted time at which the `both` filter's valve
+    /// flow gains were beyond what the valve model describes
+    /// (`Status::valve_model_misfit`: no evidence there).
+    pub valve_misfit_fraction: f64,
     /// Sensor-fault events and filter restarts (faults, gaps, numerical
     /// resets) over the whole run.
     pub faults: usize,
@@ -75,7 +79,7 @@ pub fn run_pieces(
 ) -> Result<Run, CalibrationError> {
     let mut m: Monitor<f64> = Monitor::new(p).map_err(CalibrationError::Params)?;
     let mut r = Run::default();
-    let (mut healthy, mut leading, mut evident_s) = (0.0, 0.0, 0.0);
+    let (mut healthy, mut leading, mut evident_s, mut misfit_s) = (0.0, 0.0, 0.0, 0.0);
     let mut last_t: Option<f64> = None;
     let band = p.hold_band();
     for s in pieces.iter().flat_map(|piece| piece.iter()) {
@@ -104,6 +108,9 @@ pub fn run_pieces(
         let w = st.evidence_weight as f64;
         if w > 0.5 {
             evident_s += dt;
+        }
+        if st.valve_model_misfit() {
+            misfit_s += dt;
         }
         for (k, (avg, det)) in [
             (st.leak_internal_lpm, st.detect_internal_lpm),
@@ -136,10 +143,14 @@ pub fn run_pieces(
     let n = r.counted.max(1) as f64;
     r.healthy_nis = healthy / n;
     r.leading_nis = leading / n;
-    r.evidence_fraction = if r.counted_s > 0.0 {
-        evident_s / r.counted_s
-    } else {
-        0.0
+    let share = |s: f64| {
+        if r.counted_s > 0.0 {
+            s / r.counted_s
+        } else {
+            0.0
+        }
     };
+    r.evidence_fraction = share(evident_s);
+    r.valve_misfit_fraction = share(misfit_s);
     Ok(r)
 }

@@ -144,6 +144,10 @@ pub const MAX_DETECTION_FLOOR_LPM: f64 = 3.0;
 /// the validation cannot judge (the monitor barely evaluates evidence).
 /// Healthy: 44–93 % (the lower figures at 0.6 bar).
 pub const MIN_EVIDENCE_FRACTION: f64 = 0.1;
+/// Share of the held-out time with the valve flow gains beyond what the
+/// valve model describes (`Status::valve_model_misfit`) from which the
+/// report warns: the monitor counts those samples as no evidence.
+pub const WARN_VALVE_MISFIT_FRACTION: f64 = 0.25;
 /// Change of a valve flow gain from the validated fit to the written refit,
 /// %, above which the report warns (simulated rigs: ≤ 0.2 %).
 pub const MAX_REFIT_GAIN_CHANGE_PCT: f64 = 2.0;

@@ -5,7 +5,7 @@ use super::steps::{fit_plant, missing_motion, HeldOut};
 use super::{
     check, noise, Calibration, CalibrationError, Mechanics, FLOOR_MARGIN, MAX_DETECTION_FLOOR_LPM,
     MAX_REFIT_GAIN_CHANGE_PCT, MAX_VALIDATION_NIS, MIN_DURATION_S, MIN_EVIDENCE_FRACTION,
-    MIN_STEADY_FIT_S, MIN_STEADY_S,
+    MIN_STEADY_FIT_S, MIN_STEADY_S, WARN_VALVE_MISFIT_FRACTION,
 };
 use monitor::{Params, Sample};
 
@@ -179,6 +179,12 @@ pub(super) fn calibrate_with(
             "the monitor weighed only {:.0} % of the held-out part as evidence (need {:.0} %): too little quasi-steady operation to judge",
             100.0 * v.evidence_fraction,
             100.0 * MIN_EVIDENCE_FRACTION
+        ));
+    }
+    if v.valve_misfit_fraction >= WARN_VALVE_MISFIT_FRACTION {
+        cal.warnings.push(format!(
+            "the monitor's valve flow gains stood more than 50 % off the fitted valve for {:.0} % of the held-out part: those samples are no evidence, and where they dominate the verdict is `inconclusive`; record the moves the machine makes at the speeds it makes them, or check the valve",
+            100.0 * v.valve_misfit_fraction
         ));
     }
     let held_len = held.t.1 - held.t.0;

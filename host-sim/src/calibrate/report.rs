@@ -111,8 +111,9 @@ impl Calibration {
             );
             let _ = writeln!(
                 s,
-                "  evidence weight > 0.5 for {:.0} % of the time; alarms: {}",
+                "  evidence weight > 0.5 for {:.0} % of the time; valve flow gains more than 50 % off the fit (no evidence) for {:.0} %; alarms: {}",
                 100.0 * v.evidence_fraction,
+                100.0 * v.valve_misfit_fraction,
                 if v.alarms.is_empty() {
                     "none".to_string()
                 } else {

@@ -123,7 +123,7 @@ const LEVEL_RELEASE_S: f64 = 0.5;
 /// healthy runs raised internal-leak alarms in slow retractions. Such
 /// samples count as no evidence — no alarm, no `healthy` — like suspect
 /// readings (figures: docs/evaluation.md).
-const VALVE_GAIN_MISFIT: f64 = 0.5;
+pub const VALVE_GAIN_MISFIT: f64 = 0.5;
 /// Cap of the evidence-time counter, s: it only has to reach
 /// `min_evidence_s`.
 const EVIDENCE_CAP_S: f64 = 1.0e4;
@@ -359,7 +359,7 @@ impl<T: Real> Decision<T> {
             // A valve the `both` filter must bend this far is not
             // described by the model: what it reads then is no evidence
             // either way.
-            valid &= !valve_misfit(both);
+            valid &= !valve_gains_misfit(both.valve_gain);
             let a_base = (dt / T::c(BASELINE_SMOOTHING_S)).min(T::ONE);
             let a_level = (dt / T::c(LEVEL_RELEASE_S)).min(T::ONE);
             for k in Leak::ALL {
@@ -560,10 +560,10 @@ impl<T: Real> Decision<T> {
     }
 }
 
-/// Does the filter hold valve flow gains further from the installation's
-/// than [`VALVE_GAIN_MISFIT`] (their root sum of squares)?
-fn valve_misfit<T: Real>(out: &FilterOutput<T>) -> bool {
-    let [extend, retract] = out.valve_gain;
+/// Are valve flow-gain deviations (extend, retract; relative) further from
+/// the installation's than [`VALVE_GAIN_MISFIT`] (their root sum of
+/// squares)?
+pub fn valve_gains_misfit<T: Real>([extend, retract]: [T; 2]) -> bool {
     extend * extend + retract * retract > T::c(VALVE_GAIN_MISFIT * VALVE_GAIN_MISFIT)
 }
 
