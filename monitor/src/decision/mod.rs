@@ -119,7 +119,7 @@ const LEVEL_RELEASE_S: f64 = 0.5;
 /// wrong where the valve now works (a dead zone or edge it was not
 /// calibrated on), and its leak states take the rest of that error. On
 /// development rig 1 (100 bar, 40 °C, valve kept by a partial
-/// calibration) the retract gain stood at +77 … +138 % when both
+/// calibration) the retract gain stood at +78 … +136 % when both
 /// healthy runs raised internal-leak alarms in slow retractions. Such
 /// samples count as no evidence — no alarm, no `healthy` — like suspect
 /// readings (figures: docs/evaluation.md).
