@@ -216,32 +216,38 @@ impl<T: Real, const N: usize> HypothesisFilter<T, N> {
         })
     }
 
-    /// The step's output.
+    /// The step's output. The leak flows and the valve gains are the
+    /// `both` filter's only (the decision reads no other's; zero for the
+    /// others): the other filters' evidence is their likelihood.
     fn output(&self, ctx: &StepContext<T>, e: &Eval<T>, inn: &Innovations<T>) -> FilterOutput<T> {
-        let gref = T::c(crate::estimation::model::GAIN_REF);
-        let (internal, external) = self.leak_indices();
-        let (leak_internal, leak_internal_sd) = self.leak(internal);
-        let (leak_external, leak_external_sd) = self.leak(external);
-        // Leak flow magnitude at the updated pressures: θ·|Δp| / 10 bar (a
-        // seal leaks whichever way the pressure difference pushes; a
-        // negative θ is an estimate below the healthy baseline).
-        let per_10bar = T::c(P_REF / 1.0e6);
-        let dp_int = (self.ekf.x[P3] - self.ekf.x[P4]).abs() * per_10bar;
-        let dp_ext = (self.ekf.x[P4] - ctx.inputs.p_tank_pa / T::c(P_REF)).abs() * per_10bar;
-        FilterOutput {
+        let mut out = FilterOutput {
             nis: inn.nis,
             // ln N(ν; 0, S) = −½·(νᵀS⁻¹ν + ln det S + 3·ln 2π).
             log_likelihood: T::c(-0.5)
                 * (inn.nis + inn.det.ln() + T::c(3.0 * 1.837_877_066_409_345_5)),
-            flow_internal_lpm: leak_internal * dp_int,
-            flow_external_lpm: leak_external * dp_ext,
-            flow_internal_sd_lpm: leak_internal_sd * dp_int,
-            flow_external_sd_lpm: leak_external_sd * dp_ext,
-            dp_10bar: [dp_int, dp_ext],
             innovation_sq: inn.innovation_sq,
             predicted_var: inn.predicted_var,
-            valve_gain: [self.ekf.x[GAIN_EXT] * gref, self.ekf.x[GAIN_RET] * gref],
             valve_flow_lpm: e.q_valve_a.abs() * T::c(crate::estimation::model::LPM_PER_M3S),
+            ..FilterOutput::default()
+        };
+        if self.hypothesis == Hypothesis::Both {
+            let gref = T::c(crate::estimation::model::GAIN_REF);
+            let (internal, external) = self.leak_indices();
+            let (leak_internal, leak_internal_sd) = self.leak(internal);
+            let (leak_external, leak_external_sd) = self.leak(external);
+            // Leak flow magnitude at the updated pressures: θ·|Δp| / 10 bar
+            // (a seal leaks whichever way the pressure difference pushes; a
+            // negative θ is an estimate below the healthy baseline).
+            let per_10bar = T::c(P_REF / 1.0e6);
+            let dp_int = (self.ekf.x[P3] - self.ekf.x[P4]).abs() * per_10bar;
+            let dp_ext = (self.ekf.x[P4] - ctx.inputs.p_tank_pa / T::c(P_REF)).abs() * per_10bar;
+            out.flow_internal_lpm = leak_internal * dp_int;
+            out.flow_external_lpm = leak_external * dp_ext;
+            out.flow_internal_sd_lpm = leak_internal_sd * dp_int;
+            out.flow_external_sd_lpm = leak_external_sd * dp_ext;
+            out.dp_10bar = [dp_int, dp_ext];
+            out.valve_gain = [self.ekf.x[GAIN_EXT] * gref, self.ekf.x[GAIN_RET] * gref];
         }
+        out
     }
 }
