@@ -194,11 +194,16 @@ pub struct Status {
     pub events: Events,
 }
 
+/// Valve flow-gain deviation (relative; root sum of squares of the two
+/// directions') beyond which the valve model does not describe the
+/// installation ([`Status::valve_model_misfit`]).
+pub use crate::decision::VALVE_GAIN_MISFIT;
+
 impl Status {
     /// The valve flow-gain deviations are beyond what the valve model
-    /// describes (root sum of squares above 0.5, the decision layer's
-    /// limit): the monitor counts such samples as no evidence
-    /// (`EVIDENCE_PAUSED`), neither of a leak nor of health.
+    /// describes ([`VALVE_GAIN_MISFIT`]): the monitor counts such samples
+    /// as no evidence (`EVIDENCE_PAUSED`), neither of a leak nor of
+    /// health.
     pub fn valve_model_misfit(&self) -> bool {
         crate::decision::valve_gains_misfit(self.valve_gain_deviation)
     }

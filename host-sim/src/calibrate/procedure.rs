@@ -7,6 +7,7 @@ use super::{
     MAX_REFIT_GAIN_CHANGE_PCT, MAX_VALIDATION_NIS, MIN_DURATION_S, MIN_EVIDENCE_FRACTION,
     MIN_STEADY_FIT_S, MIN_STEADY_S, WARN_VALVE_MISFIT_FRACTION,
 };
+use monitor::status::VALVE_GAIN_MISFIT;
 use monitor::{Params, Sample};
 
 /// The calibration, with the valve and load regressions judged as
@@ -183,7 +184,8 @@ pub(super) fn calibrate_with(
     }
     if v.valve_misfit_fraction >= WARN_VALVE_MISFIT_FRACTION {
         cal.warnings.push(format!(
-            "the monitor's valve flow gains stood more than 50 % off the fitted valve for {:.0} % of the held-out part: those samples are no evidence, and where they dominate the verdict is `inconclusive`; record the moves the machine makes at the speeds it makes them, or check the valve",
+            "the monitor's valve flow gains stood more than {:.0} % off the fitted valve for {:.0} % of the held-out part: those samples are no evidence, and where they dominate the verdict is `inconclusive`; record the moves the machine makes at the speeds it makes them, or check the valve",
+            100.0 * VALVE_GAIN_MISFIT,
             100.0 * v.valve_misfit_fraction
         ));
     }

@@ -1,6 +1,7 @@
 //! The calibration's report, summary and TOML.
 
 use super::{Calibration, CalibrationError, MAX_VALIDATION_NIS};
+use monitor::status::VALVE_GAIN_MISFIT;
 use monitor::Params;
 
 impl Calibration {
@@ -111,8 +112,9 @@ impl Calibration {
             );
             let _ = writeln!(
                 s,
-                "  evidence weight > 0.5 for {:.0} % of the time; valve flow gains more than 50 % off the fit (no evidence) for {:.0} %; alarms: {}",
+                "  evidence weight > 0.5 for {:.0} % of the time; valve flow gains more than {:.0} % off the fit (no evidence) for {:.0} %; alarms: {}",
                 100.0 * v.evidence_fraction,
+                100.0 * VALVE_GAIN_MISFIT,
                 100.0 * v.valve_misfit_fraction,
                 if v.alarms.is_empty() {
                     "none".to_string()

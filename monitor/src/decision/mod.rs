@@ -42,7 +42,7 @@
 //!    reset within the warm-up time, and a model that fits (mean NIS of
 //!    the best filter below [`MISMATCH_NIS`]). Without that the verdict is
 //!    `inconclusive` ([`Decision::conclusive`]). A sample at which the
-//!    `both` filter holds a valve flow gain beyond [`VALVE_GAIN_MISFIT`]
+//!    `both` filter holds valve flow gains beyond [`VALVE_GAIN_MISFIT`]
 //!    counts as no evidence at all: the valve model does not describe the
 //!    installation there.
 //!
@@ -112,8 +112,9 @@ const WARNING_RELEASE: f64 = 0.8;
 /// 0.5 s that false alarm went and 3 of 336 development detections were
 /// lost; 1 s lost as many and 2 s more latency.
 const LEVEL_RELEASE_S: f64 = 0.5;
-/// Valve flow-gain deviation (relative, either direction) beyond which the
-/// `both` filter's valve no longer describes the installation. Valves
+/// Valve flow-gain deviation (relative; the root sum of squares of the
+/// extend and retract gains') beyond which the `both` filter's valve no
+/// longer describes the installation. Valves
 /// differ by ±5–10 % and calibration fits the installation's; a filter
 /// that needs ±50 % makes up with the gain for a valve model that is
 /// wrong where the valve now works (a dead zone or edge it was not

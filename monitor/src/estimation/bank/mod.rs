@@ -97,7 +97,9 @@ pub struct FilterOutput<T> {
     pub nis: T,
     /// Gaussian log-likelihood of this sample's measurements.
     pub log_likelihood: T,
-    /// Internal leak flow at the current pressures, l/min.
+    /// Internal leak flow at the current pressures, l/min. This, the other
+    /// flows, `dp_10bar` and `valve_gain` are the `both` filter's only
+    /// (the decision reads no other's): 0 for the other filters.
     pub flow_internal_lpm: T,
     /// External leak flow at the current pressures, l/min.
     pub flow_external_lpm: T,

@@ -368,31 +368,38 @@ fn healthy_laminar_leakage_never_estimated_below_its_floor() {
     assert_eq!(f.ekf.x[LAMINAR], -0.5, "the readings do push it down");
 }
 
+/// One step of `hypothesis`' filter (`N` states) at a hold with the rod
+/// chamber `p4_bar_below_p3` bar below the piston chamber and its internal
+/// leak coefficient at 3 l/min per 10 bar (uncertain).
+fn internal_leak_at_hold<const N: usize>(
+    hypothesis: Hypothesis,
+    p4_bar_below_p3: f64,
+) -> FilterOutput<f64> {
+    let mut s = setting::<f64>(false);
+    s.s0[P4] = s.s0[P3] - p4_bar_below_p3 * BAR / 1e7;
+    let p0 = [1e-3; NB];
+    let mut f = HypothesisFilter::<f64, N>::new(hypothesis, &s.s0, &p0, 1.0);
+    let (Some(i), _) = leak_indices::<N>(hypothesis) else {
+        panic!("{hypothesis:?} has no internal leak state")
+    };
+    f.ekf.x[i] = 3.0;
+    let m = Measurement {
+        z: [f.ekf.x[XP], f.ekf.x[P3], f.ekf.x[P4]],
+        r: s.r,
+    };
+    let q = s.noise.variances(s.ctx.step.dt);
+    f.step(&s.plant, &s.ctx, &q, &m).expect("a filter step")
+}
+
 #[test]
 fn no_internal_leak_flow_is_claimed_while_the_chamber_pressures_are_equal() {
-    // The `both` filter (the one whose flows the decision reads) at a
-    // hold, its internal coefficient reading 3 l/min per 10 bar (and
-    // uncertain): what it reports, and what the decision alarms on, is
-    // the flow θ·|p3 − p4| / 10 bar with its 1σ.
-    let run = |p4_bar_below_p3: f64| {
-        let mut s = setting::<f64>(false);
-        s.s0[P4] = s.s0[P3] - p4_bar_below_p3 * BAR / 1e7;
-        let p0 = [1e-3; NB];
-        let mut f = HypothesisFilter::<f64, { NB + 2 }>::new(Hypothesis::Both, &s.s0, &p0, 1.0);
-        let (Some(i), Some(_)) = leak_indices::<{ NB + 2 }>(Hypothesis::Both) else {
-            panic!("the both filter has two leak states")
-        };
-        f.ekf.x[i] = 3.0;
-        let m = Measurement {
-            z: [f.ekf.x[XP], f.ekf.x[P3], f.ekf.x[P4]],
-            r: s.r,
-        };
-        let q = s.noise.variances(s.ctx.step.dt);
-        f.step(&s.plant, &s.ctx, &q, &m).expect("a filter step")
-    };
+    // The `both` filter (the one whose flows the decision reads): what it
+    // reports, and what the decision alarms on, is the flow
+    // θ·|p3 − p4| / 10 bar with its 1σ.
+    let run = internal_leak_at_hold::<{ NB + 2 }>;
     // Equal pressures: the leak path carries nothing, whatever θ reads,
     // and neither does its uncertainty: no internal-leak claim.
-    let equal = run(0.0);
+    let equal = run(Hypothesis::Both, 0.0);
     assert!(
         equal.flow_internal_lpm.abs() < 0.02,
         "{}",
@@ -404,29 +411,16 @@ fn no_internal_leak_flow_is_claimed_while_the_chamber_pressures_are_equal() {
         equal.flow_internal_sd_lpm
     );
     // 8 bar across the piston: the same coefficient is a 2.4 l/min leak.
-    let apart = run(8.0);
+    let apart = run(Hypothesis::Both, 8.0);
     assert!(apart.flow_internal_lpm > 2.0, "{}", apart.flow_internal_lpm);
 }
 
 #[test]
 fn only_the_both_filter_reports_leak_flows_and_valve_gains() {
-    // An internal-leak filter with 8 bar across the piston and a
-    // coefficient of 3 l/min per 10 bar: its evidence is its likelihood;
-    // the flows and gains the decision reads are the `both` filter's.
-    let mut s = setting::<f64>(false);
-    s.s0[P4] = s.s0[P3] - 8.0 * BAR / 1e7;
-    let p0 = [1e-3; NB];
-    let mut f = HypothesisFilter::<f64, { NB + 1 }>::new(Hypothesis::Internal, &s.s0, &p0, 1.0);
-    let (Some(i), None) = leak_indices::<{ NB + 1 }>(Hypothesis::Internal) else {
-        panic!("the internal filter has one leak state")
-    };
-    f.ekf.x[i] = 3.0;
-    let m = Measurement {
-        z: [f.ekf.x[XP], f.ekf.x[P3], f.ekf.x[P4]],
-        r: s.r,
-    };
-    let q = s.noise.variances(s.ctx.step.dt);
-    let out = f.step(&s.plant, &s.ctx, &q, &m).expect("a filter step");
+    // The internal-leak filter in the same place: its evidence is its
+    // likelihood; the flows and gains the decision reads are the `both`
+    // filter's.
+    let out = internal_leak_at_hold::<{ NB + 1 }>(Hypothesis::Internal, 8.0);
     assert!(out.log_likelihood.is_finite() && out.nis > 0.0);
     assert_eq!(
         (
