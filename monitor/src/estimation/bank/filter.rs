@@ -230,7 +230,9 @@ impl<T: Real, const N: usize> HypothesisFilter<T, N> {
             valve_flow_lpm: e.q_valve_a.abs() * T::c(crate::estimation::model::LPM_PER_M3S),
             ..FilterOutput::default()
         };
-        if self.hypothesis == Hypothesis::Both {
+        // Only the `both` filter has MAX_STATES states: a constant per
+        // filter, as in `leak_indices`.
+        if N == MAX_STATES {
             let gref = T::c(crate::estimation::model::GAIN_REF);
             let (internal, external) = self.leak_indices();
             let (leak_internal, leak_internal_sd) = self.leak(internal);
