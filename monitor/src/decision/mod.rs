@@ -129,8 +129,9 @@ pub const VALVE_GAIN_MISFIT: f64 = 0.5;
 /// `min_evidence_s`.
 const EVIDENCE_CAP_S: f64 = 1.0e4;
 /// A sample whose evidence weight is below this is reported as
-/// `EVIDENCE_PAUSED`.
-const PAUSED_WEIGHT: f64 = 0.5;
+/// `EVIDENCE_PAUSED`: the plant is not quasi-steady enough for it to count
+/// for much.
+pub const PAUSED_WEIGHT: f64 = 0.5;
 
 /// Decision state.
 #[derive(Clone, Debug)]
@@ -338,7 +339,6 @@ impl<T: Real> Decision<T> {
         t_s: f64,
         events: &mut Events,
     ) -> u16 {
-        let mut valid = valid;
         if out.iter().any(Option::is_none) {
             self.reset_hold_s = self.reset_hold_after_s;
         } else {
@@ -349,56 +349,85 @@ impl<T: Real> Decision<T> {
         // small coefficient error times a large pressure difference would
         // otherwise look like a flow spike.
         let dt_w = dt * weight;
-        // The reported size is the plain time average of the leak flow (a
-        // leak really flows more while the pressure difference is large);
-        // detection and model evidence count quiet time only.
-        let a_slow = (dt / self.slow_s).min(T::ONE);
-        let a_fast = (dt_w / self.fast_s).min(T::ONE);
-        let a_evidence = (dt_w / self.slow_s).min(T::ONE);
+        let mut valid = valid;
         if let Some(both) = &out[Hypothesis::Both as usize] {
-            self.valve = both.valve_gain;
             // A valve the `both` filter must bend this far is not
             // described by the model: what it reads then is no evidence
             // either way.
             valid &= !valve_gains_misfit(both.valve_gain);
-            let a_base = (dt / T::c(BASELINE_SMOOTHING_S)).min(T::ONE);
-            let a_level = (dt / T::c(LEVEL_RELEASE_S)).min(T::ONE);
-            for k in Leak::ALL {
-                follow(&mut self.baseline_now[k], a_base, self.baseline[k][region]);
-                // Never below the region's level: rises at once, falls
-                // with the time constant.
-                let level = self.alarm_lpm[k][region];
-                follow(&mut self.level_now[k], a_level, level);
-                self.level_now[k] = self.level_now[k].max(level);
-            }
-            let flows = PerLeak::new(
-                both.flow_internal_lpm - self.baseline_now[Leak::Internal] * both.dp_10bar[0],
-                both.flow_external_lpm - self.baseline_now[Leak::External] * both.dp_10bar[1],
-            );
-            let sds = PerLeak::new(both.flow_internal_sd_lpm, both.flow_external_sd_lpm);
-            for k in Leak::ALL {
-                follow(&mut self.fast[k], a_fast, flows[k]);
-                // The alarm looks at the lower confidence bound: a leak
-                // estimate the filter is still unsure of (after a start,
-                // across a transient) does not alarm however large.
-                let lower = flows[k] - T::c(ALARM_SIGMAS) * sds[k];
-                follow(&mut self.fast_lower[k], a_fast, lower);
-                follow(&mut self.slow[k], a_slow, flows[k]);
-                follow(&mut self.slow_sd[k], a_slow, sds[k]);
+            self.follow_flows(both, dt, dt_w, region);
+        }
+        self.count_evidence(dt, if valid { weight } else { T::ZERO });
+        if !valid {
+            return health::EVIDENCE_PAUSED;
+        }
+        let a_evidence = (dt_w / self.slow_s).min(T::ONE);
+        self.update_probabilities(out, dt_w, weight, a_evidence);
+        if self.accumulate_excess(dt_w) {
+            if let Some(latched) = self.latch.raise(self.raised.set(), t_s) {
+                let _ = events.push(Event::AlarmRaised(Verdict::of_leaks(latched)));
             }
         }
-        let counted = if valid { weight } else { T::ZERO };
+        self.update_warning(region);
+        self.mismatch = self.nis[self.leading as usize] > T::c(MISMATCH_NIS);
+        if weight < T::c(PAUSED_WEIGHT) {
+            health::EVIDENCE_PAUSED
+        } else {
+            0
+        }
+    }
+
+    /// Follow the `both` filter's leak flows, less the region's baseline,
+    /// with the detection and size averages; the baseline and the alarm
+    /// level in use follow the operating `region`.
+    fn follow_flows(&mut self, both: &FilterOutput<T>, dt: T, dt_w: T, region: usize) {
+        self.valve = both.valve_gain;
+        let a_base = (dt / T::c(BASELINE_SMOOTHING_S)).min(T::ONE);
+        let a_level = (dt / T::c(LEVEL_RELEASE_S)).min(T::ONE);
+        for k in Leak::ALL {
+            follow(&mut self.baseline_now[k], a_base, self.baseline[k][region]);
+            // Never below the region's level: rises at once, falls with
+            // the time constant.
+            let level = self.alarm_lpm[k][region];
+            follow(&mut self.level_now[k], a_level, level);
+            self.level_now[k] = self.level_now[k].max(level);
+        }
+        let flows = PerLeak::new(
+            both.flow_internal_lpm - self.baseline_now[Leak::Internal] * both.dp_10bar[0],
+            both.flow_external_lpm - self.baseline_now[Leak::External] * both.dp_10bar[1],
+        );
+        let sds = PerLeak::new(both.flow_internal_sd_lpm, both.flow_external_sd_lpm);
+        // The reported size is the plain time average of the leak flow (a
+        // leak really flows more while the pressure difference is large);
+        // detection counts quiet time only.
+        let a_slow = (dt / self.slow_s).min(T::ONE);
+        let a_fast = (dt_w / self.fast_s).min(T::ONE);
+        for k in Leak::ALL {
+            follow(&mut self.fast[k], a_fast, flows[k]);
+            // The alarm looks at the lower confidence bound: a leak
+            // estimate the filter is still unsure of (after a start,
+            // across a transient) does not alarm however large.
+            let lower = flows[k] - T::c(ALARM_SIGMAS) * sds[k];
+            follow(&mut self.fast_lower[k], a_fast, lower);
+            follow(&mut self.slow[k], a_slow, flows[k]);
+            follow(&mut self.slow_sd[k], a_slow, sds[k]);
+        }
+    }
+
+    /// Count `counted` (the evidence weight, 0 for no evidence) over `dt`
+    /// s into the evidence time and its recent average.
+    fn count_evidence(&mut self, dt: T, counted: T) {
         let a_recent = (dt / self.evidence_memory_s).min(T::ONE);
         self.recent_weight += a_recent * (counted - self.recent_weight);
         self.recent_time += a_recent * (T::ONE - self.recent_time);
         // Capped: it only has to reach `min_evidence_s`.
         self.evidence_s = (self.evidence_s + dt * counted).min(T::c(EVIDENCE_CAP_S));
-        if !valid {
-            return health::EVIDENCE_PAUSED;
-        }
-        self.update_probabilities(out, dt_w, weight, a_evidence);
+    }
 
-        // CUSUM on the relative excess over the alarm level, per leak.
+    /// The CUSUM on the relative excess over the alarm level, per leak,
+    /// over `dt_w` s of evidence time. Returns whether a leak was newly
+    /// raised.
+    fn accumulate_excess(&mut self, dt_w: T) -> bool {
         let mut new_leak = false;
         for k in Leak::ALL {
             let excess = if self.supports(k) {
@@ -422,24 +451,18 @@ impl<T: Real> Decision<T> {
                 new_leak = true;
             }
         }
-        if new_leak {
-            if let Some(latched) = self.latch.raise(self.raised.set(), t_s) {
-                let _ = events.push(Event::AlarmRaised(Verdict::of_leaks(latched)));
-            }
-        }
-        // Each leak against its own warning level, with hysteresis.
+        new_leak
+    }
+
+    /// Each leak against its own warning level in `region`, with
+    /// hysteresis; no warning while a leak alarm is latched.
+    fn update_warning(&mut self, region: usize) {
         let over = |k: Leak, scale: T| self.slow[k] >= self.warning_lpm[k][region] * scale;
         let level_reached = over(Leak::Internal, T::ONE) || over(Leak::External, T::ONE);
         let release = T::c(WARNING_RELEASE);
         let still = over(Leak::Internal, release) || over(Leak::External, release);
         self.warning =
             self.latch.latched().is_empty() && (level_reached || (self.warning && still));
-        self.mismatch = self.nis[self.leading as usize] > T::c(MISMATCH_NIS);
-        if weight < T::c(PAUSED_WEIGHT) {
-            health::EVIDENCE_PAUSED
-        } else {
-            0
-        }
     }
 
     /// Do the model probabilities support `leak`: do the hypotheses with
