@@ -199,6 +199,10 @@ pub struct Status {
 /// installation ([`Status::valve_model_misfit`]).
 pub use crate::decision::VALVE_GAIN_MISFIT;
 
+/// Evidence weight below which a sample is no evidence
+/// ([`Status::quasi_steady`]).
+pub use crate::decision::PAUSED_WEIGHT;
+
 impl Status {
     /// The valve flow-gain deviations are beyond what the valve model
     /// describes ([`VALVE_GAIN_MISFIT`]): the monitor counts such samples
@@ -206,5 +210,12 @@ impl Status {
     /// health.
     pub fn valve_model_misfit(&self) -> bool {
         crate::decision::valve_gains_misfit(self.valve_gain_deviation)
+    }
+
+    /// The plant was quasi-steady enough at this sample for it to count as
+    /// evidence ([`PAUSED_WEIGHT`]); whether the valve model fitted there
+    /// is [`valve_model_misfit`](Self::valve_model_misfit)'s question.
+    pub fn quasi_steady(&self) -> bool {
+        f64::from(self.evidence_weight) >= PAUSED_WEIGHT
     }
 }

@@ -30,7 +30,12 @@ pub struct Run {
     /// The same per leak and valve-command region at the time of the
     /// reading ([`REGIONS`]): `[leak][region]`, l/min.
     pub detect_region_max_lpm: [[f64; 3]; 2],
-    /// Fraction of the counted time with evidence weight > 0.5.
+    /// Fraction of the counted time at which the plant was quasi-steady
+    /// enough to count as evidence (`Status::quasi_steady`). Samples at
+    /// which the valve model misfits are in it: they are counted apart
+    /// (below), and folding them in refused two further-rig cells whose
+    /// calibrated healthy runs ended `healthy` without an alarm
+    /// (docs/evaluation.md).
     pub evidence_fraction: f64,
     /// Fraction of the counted time at which the `both` filter's valve
     /// flow gains were beyond what the valve model describes
@@ -106,7 +111,7 @@ pub fn run_pieces(
         healthy += st.evidence[0].mean_nis as f64;
         leading += st.evidence[st.leading as usize].mean_nis as f64;
         let w = st.evidence_weight as f64;
-        if w > 0.5 {
+        if st.quasi_steady() {
             evident_s += dt;
         }
         if st.valve_model_misfit() {
