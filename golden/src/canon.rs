@@ -58,6 +58,7 @@ pub fn status(h: &mut Fnv64, s: &Status) {
         leak_external_sd_lpm,
         detect_internal_lpm,
         detect_external_lpm,
+        alarm_level_lpm,
         valve_gain_deviation,
         evidence_weight,
         evidence,
@@ -79,6 +80,8 @@ pub fn status(h: &mut Fnv64, s: &Status) {
     ] {
         opt_f32(h, v);
     }
+    h.f32(alarm_level_lpm[0]);
+    h.f32(alarm_level_lpm[1]);
     h.f32(valve_gain_deviation[0]);
     h.f32(valve_gain_deviation[1]);
     h.f32(*evidence_weight);
@@ -197,6 +200,7 @@ mod tests {
             leak_external_sd_lpm: Some(0.4),
             detect_internal_lpm: Some(0.5),
             detect_external_lpm: Some(0.6),
+            alarm_level_lpm: [0.08, 0.69],
             valve_gain_deviation: [0.7, 0.8],
             evidence_weight: 0.9,
             evidence: [Evidence {
@@ -221,7 +225,7 @@ mod tests {
     fn every_status_field_changes_the_hash() {
         let b = hash(&base());
         let nudge = |v: f32| f32::from_bits(v.to_bits() ^ 1);
-        let mutations: [&dyn Fn(&mut Status); 20] = [
+        let mutations: [&dyn Fn(&mut Status); 22] = [
             &|s| s.noise_sigma[2] = nudge(s.noise_sigma[2]),
             &|s| s.t_s = f64::from_bits(s.t_s.to_bits() ^ 1),
             &|s| s.verdict = Verdict::Both,
@@ -232,6 +236,8 @@ mod tests {
             &|s| s.leak_external_sd_lpm = s.leak_external_sd_lpm.map(nudge),
             &|s| s.detect_internal_lpm = s.detect_internal_lpm.map(nudge),
             &|s| s.detect_external_lpm = s.detect_external_lpm.map(nudge),
+            &|s| s.alarm_level_lpm[0] = nudge(s.alarm_level_lpm[0]),
+            &|s| s.alarm_level_lpm[1] = nudge(s.alarm_level_lpm[1]),
             &|s| s.valve_gain_deviation[0] = nudge(s.valve_gain_deviation[0]),
             &|s| s.valve_gain_deviation[1] = nudge(s.valve_gain_deviation[1]),
             &|s| s.evidence_weight = nudge(s.evidence_weight),

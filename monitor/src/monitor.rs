@@ -417,6 +417,7 @@ impl<T: Real> Monitor<T> {
         let estimating = self.bank.is_some() && flags & health::WARMING_UP == 0;
         let (size, sd) = d.leak_flows();
         let detect = d.detection_flows();
+        let level = d.alarm_levels();
         Status {
             t_s,
             verdict,
@@ -428,6 +429,7 @@ impl<T: Real> Monitor<T> {
             leak_external_sd_lpm: estimating.then_some(sd.external()),
             detect_internal_lpm: estimating.then_some(detect.internal()),
             detect_external_lpm: estimating.then_some(detect.external()),
+            alarm_level_lpm: [level.internal(), level.external()],
             valve_gain_deviation: d.valve(),
             evidence_weight: self.quiet.weight().to_f32(),
             evidence: d.evidence(),

@@ -172,6 +172,16 @@ pub struct Status {
     pub detect_internal_lpm: Option<f32>,
     /// External leak flow averaged over the detection window, l/min.
     pub detect_external_lpm: Option<f32>,
+    /// Alarm level in use for the internal and external leak, l/min: the
+    /// smallest leak flow, after the healthy baseline, that can raise an
+    /// alarm at this sample (its estimate less 2σ must stay above it for
+    /// the debounce time) —
+    /// the user's `alarm.alarm_lpm` raised to the installation's detection
+    /// floor in the current operating region (`baseline.region_floor_*`,
+    /// `detection_floor_lpm`, a provisional set's `provisional_floor_lpm`).
+    /// It is what a `Healthy` verdict vouches for: no leak above it. After
+    /// a region with a higher floor it falls with a 0.5 s time constant.
+    pub alarm_level_lpm: [f32; 2],
     /// Estimated valve flow-gain deviations from the parameters for the
     /// extend and retract directions, relative (0.05: the valve passes 5 %
     /// more than parameterised). A maintenance indicator, and a hint to

@@ -563,6 +563,15 @@ impl<T: Real> Decision<T> {
         [self.valve[0].to_f32(), self.valve[1].to_f32()]
     }
 
+    /// The alarm level in use per leak, l/min: the user's `alarm_lpm`
+    /// raised to the installation's floor in the current operating region
+    /// (or a provisional set's gross level); after a region with a higher
+    /// one it falls with [`LEVEL_RELEASE_S`]. The CUSUM compares the leak
+    /// flow, less the baseline and 2σ, with it.
+    pub fn alarm_levels(&self) -> PerLeak<f32> {
+        self.level_now.map(T::to_f32)
+    }
+
     /// The fast (detection) averages of the leak flows, l/min, never
     /// negative.
     pub fn detection_flows(&self) -> PerLeak<f32> {
@@ -690,6 +699,60 @@ mod tests {
         assert_eq!(run(true), None);
         // A reading that stays is a leak, alarmed soon after.
         assert!(run(false).is_some_and(|t| t < 2.5), "{:?}", run(false));
+    }
+
+    #[test]
+    fn the_published_alarm_level_shows_the_region_floor_and_falls_back_after_it() {
+        let mut p = Params::nominal();
+        let user = p.alarm.alarm_lpm;
+        // Extending: this installation's internal leak reads 0.6 l/min of
+        // model error; holding, its external one 0.3.
+        p.baseline.region_floor_internal_lpm = [0.0, 0.0, 0.6];
+        p.baseline.region_floor_external_lpm = [0.0, 0.3, 0.0];
+        let mut d: Decision<f64> = Decision::new(&p);
+        let mut events = Events::new();
+        let mut t = 0.0;
+        // `secs` of a healthy reading in `region`: the published levels.
+        let mut run = |d: &mut Decision<f64>, region: usize, secs: f64| {
+            for _ in 0..(secs * 1000.0).round() as usize {
+                t += 0.001;
+                d.update(&outputs(0.0), 0.001, 1.0, true, region, t, &mut events);
+            }
+            let l = d.alarm_levels();
+            (f64::from(l.internal()), f64::from(l.external()))
+        };
+        let close =
+            |(a, b): (f64, f64), (x, y): (f64, f64)| (a - x).abs() < 1e-4 && (b - y).abs() < 1e-4;
+        let settle = 10.0 * LEVEL_RELEASE_S;
+        let hold = run(&mut d, 1, settle);
+        assert!(close(hold, (user, 0.3)), "{hold:?}");
+        // Entering the extending region the floor shows at once; the
+        // holding region's falls back to the user's level.
+        let first = run(&mut d, 2, 0.001);
+        assert!((first.0 - 0.6).abs() < 1e-6 && first.1 > 0.29, "{first:?}");
+        let extend = run(&mut d, 2, settle);
+        assert!(close(extend, (0.6, user)), "{extend:?}");
+        // Retracting: no region floor, the user's level for both.
+        let retract = run(&mut d, 0, settle);
+        assert!(close(retract, (user, user)), "{retract:?}");
+    }
+
+    #[test]
+    fn a_provisional_set_publishes_its_gross_level() {
+        let p = Params::provisional();
+        let gross = p.baseline.provisional_floor_lpm as f32;
+        assert!(gross > p.alarm.alarm_lpm as f32);
+        let mut d: Decision<f64> = Decision::new(&p);
+        assert_eq!(d.alarm_levels(), PerLeak::splat(gross), "from the start");
+        let mut events = Events::new();
+        // In every region, counting as evidence or not (the warm-up).
+        for (i, region) in [1, 2, 0, 1].into_iter().enumerate() {
+            for k in 0..1000 {
+                let t = (i * 1000 + k) as f64 * 0.001;
+                d.update(&outputs(0.0), 0.001, 1.0, i > 0, region, t, &mut events);
+            }
+            assert_eq!(d.alarm_levels(), PerLeak::splat(gross), "region {region}");
+        }
     }
 
     #[test]
