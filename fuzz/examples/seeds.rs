@@ -10,13 +10,13 @@ use monitor::device::alarm::AlarmState;
 use monitor::protocol::auth::{acknowledge_frame, AckKey, KeyKind};
 use monitor::protocol::{
     AlarmFrame, CanFrame, ChallengeFrame, DetailFrame, Encoder, HeartbeatFrame, IdentityFrame,
-    Message, Node, ResetCause, StatusFrame, VersionFrame,
+    Message, Node, ResetCause, SensitivityFrame, StatusFrame, VersionFrame,
 };
 use monitor::{Hypothesis, LeakSet, Verdict};
 use std::fmt::Write as _;
 use std::path::Path;
 
-fn messages(i: usize) -> [Message; 7] {
+fn messages(i: usize) -> [Message; 8] {
     [
         Message::Status(StatusFrame {
             verdict: [Verdict::Healthy, Verdict::Internal, Verdict::External][i % 3],
@@ -62,6 +62,11 @@ fn messages(i: usize) -> [Message; 7] {
         Message::Version(VersionFrame {
             firmware: [0, 1, i as u8],
             link_protocol: 1,
+        }),
+        Message::Sensitivity(SensitivityFrame {
+            alarm_level_internal_ml_min: (i % 3 != 0).then_some(80 * i as u16),
+            alarm_level_external_ml_min: Some(1700),
+            evidence_weight_pct: Some((i * 5) as u8),
         }),
     ]
 }
@@ -121,9 +126,9 @@ fn main() {
     odd += &candump_line(1_700_000_002.000_6, &frames[1]).replace('\n', " R\n");
     write(&root.join("candump"), "skipped.log", odd.as_bytes());
     let mut gaps = String::new();
-    // Status frames (the first of each group of 7) with counters 0, 1, 3,
+    // Status frames (the first of each group of 8) with counters 0, 1, 3,
     // 3, 8: two lost, one repeated, five lost.
-    for k in [0usize, 7, 21, 21, 56] {
+    for k in [0usize, 8, 24, 24, 64] {
         gaps += &candump_line(1_700_000_003.0 + k as f64 * 0.01, &frames[k]);
     }
     write(
@@ -136,7 +141,7 @@ fn main() {
     // byte 0: the CRC as encoded).
     let dir = root.join("protocol_decoder");
     let mut seq = Vec::new();
-    for (k, f) in frames.iter().enumerate().take(7) {
+    for (k, f) in frames.iter().enumerate().take(8) {
         let mut one = any_bytes(f);
         one.push(0);
         write(&dir, &format!("kind-{k}"), &one);

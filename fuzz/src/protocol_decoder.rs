@@ -19,11 +19,13 @@ use monitor::protocol::{e2e, CanFrame, DecodeError, Decoder, Encoder, MessageKin
 
 /// Bits of the data bytes that `decode` ignores and `encode` writes as 0:
 /// the reserved bits 6–7 of byte 1 of `LM_Detail` (`Leading` is two
-/// bits), and the reserved high nibble of byte 1 and bytes 6–7 of
-/// `LM_Version`.
-const IGNORED: [(MessageKind, [u8; 8]); 2] = [
+/// bits), the reserved high nibble of byte 1 and bytes 6–7 of
+/// `LM_Version`, and the reserved high nibble of byte 1 and byte 7 of
+/// `LM_Sensitivity`.
+const IGNORED: [(MessageKind, [u8; 8]); 3] = [
     (MessageKind::Detail, [0, 0xC0, 0, 0, 0, 0, 0, 0]),
     (MessageKind::Version, [0, 0xF0, 0, 0, 0, 0, 0xFF, 0xFF]),
+    (MessageKind::Sensitivity, [0, 0xF0, 0, 0, 0, 0, 0, 0xFF]),
 ];
 
 fn ignored(kind: MessageKind) -> [u8; 8] {

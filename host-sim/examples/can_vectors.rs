@@ -13,9 +13,10 @@ use monitor::device::alarm::AlarmState;
 use monitor::protocol::auth::{
     acknowledge_frame, acknowledge_frame_for, AckKey, KeyKind, DEVELOPMENT_KEY,
 };
+use monitor::protocol::sensitivity;
 use monitor::protocol::{
     AlarmFrame, CanFrame, ChallengeFrame, Decoder, DetailFrame, Encoder, HeartbeatFrame,
-    IdentityFrame, Message, Node, ResetCause, StatusFrame, VersionFrame,
+    IdentityFrame, Message, Node, ResetCause, SensitivityFrame, StatusFrame, VersionFrame,
 };
 use monitor::LeakSet;
 use monitor::{Hypothesis, Verdict};
@@ -88,6 +89,24 @@ fn messages() -> Vec<Message> {
             missed_samples: (i * 17 % 256) as u8,
             adc_overruns: (i % 16) as u8,
             can_tx_dropped: (15 - i % 16) as u8,
+        }));
+        // Range ends and not available among them.
+        let level = |k: i32| -> Option<u16> {
+            match (i + k) % 5 {
+                0 => None,
+                1 => Some(sensitivity::LEVEL_MAX_ML_MIN),
+                2 => Some(0),
+                n => Some((n * 4099 + i * 577) as u16),
+            }
+        };
+        v.push(Message::Sensitivity(SensitivityFrame {
+            alarm_level_internal_ml_min: level(0),
+            alarm_level_external_ml_min: level(2),
+            evidence_weight_pct: match i % 6 {
+                0 => None,
+                1 => Some(sensitivity::WEIGHT_MAX_PCT),
+                n => Some((n * 23 - 46) as u8),
+            },
         }));
     }
     // 20 of a kind here too; every outcome code, and none.

@@ -503,13 +503,14 @@ pub fn format_record(r: &FrameRecord, time: &str) -> String {
         Outcome::RepeatedCounter => " REPEATED COUNTER".to_string(),
         _ => String::new(),
     };
+    // As wide as the longest node-0 name, `LM_Sensitivity`.
     match r.counter {
         Some(c) => format!(
-            "({time}) {} {id} {name:<12} #{c:<2}{flag} {}",
+            "({time}) {} {id} {name:<14} #{c:<2}{flag} {}",
             r.iface, r.text
         ),
         None => format!(
-            "({time}) {} {id} {name:<12} {} [{}]",
+            "({time}) {} {id} {name:<14} {} [{}]",
             r.iface, r.text, r.data
         ),
     }

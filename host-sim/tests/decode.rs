@@ -3,7 +3,7 @@
 //! exit status, malformed lines.
 
 use monitor::device::alarm::AlarmState;
-use monitor::protocol::{AlarmFrame, CanFrame, Encoder, Message, StatusFrame};
+use monitor::protocol::{AlarmFrame, CanFrame, Encoder, Message, SensitivityFrame, StatusFrame};
 use monitor::LeakSet;
 use monitor::Verdict;
 use std::path::Path;
@@ -231,4 +231,57 @@ fn several_monitors_on_one_bus_are_decoded_by_node() {
     let out = host_sim(&["decode", "--node", "8", path]);
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("not a node number"));
+}
+
+#[test]
+fn the_sensitivity_frame_shows_the_alarm_levels_in_use() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut enc = Encoder::new();
+    let frame = |internal: Option<u16>, weight: Option<u8>| {
+        Message::Sensitivity(SensitivityFrame {
+            alarm_level_internal_ml_min: internal,
+            alarm_level_external_ml_min: Some(1700),
+            evidence_weight_pct: weight,
+        })
+    };
+    let log = line(1_650_000, &enc.encode(&frame(Some(80), Some(63))))
+        + &line(2_650_000, &enc.encode(&frame(None, None)));
+    let path = dir.path().join("sensitivity.log");
+    std::fs::write(&path, log).unwrap();
+    let path = path.to_str().unwrap();
+
+    let out = host_sim(&["decode", "--strict", path]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8(out.stdout).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    assert!(lines[0].contains("can0 307 LM_Sensitivity #0"), "{text}");
+    assert!(
+        lines[0].contains(
+            "AlarmLevelInternal=0.080 l/min AlarmLevelExternal=1.700 l/min EvidenceWeight=63 %"
+        ),
+        "{text}"
+    );
+    assert!(
+        lines[1].contains("AlarmLevelInternal=n/a") && lines[1].contains("EvidenceWeight=n/a"),
+        "{text}"
+    );
+
+    let out = host_sim(&["decode", "--json", path]);
+    let rows: Vec<serde_json::Value> = String::from_utf8(out.stdout)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(rows[0]["message"], "LM_Sensitivity");
+    assert_eq!(rows[0]["id"], 0x307);
+    assert_eq!(rows[0]["signals"]["AlarmLevelInternal"], 0.08);
+    assert_eq!(rows[0]["signals"]["AlarmLevelExternal"], 1.7);
+    assert_eq!(rows[0]["signals"]["EvidenceWeight"], 63.0);
+    assert!(rows[1]["signals"]["AlarmLevelInternal"].is_null());
+    assert!(rows[1]["signals"]["EvidenceWeight"].is_null());
+    assert_eq!(rows[1]["counter"], 1);
 }

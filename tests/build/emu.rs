@@ -18,8 +18,9 @@
 //! - `NAME.reference.bin`: per sample, what the host computes from those
 //!   codes through the firmware's own pipeline, `monitor::device::
 //!   Estimator::on_block` (with the acknowledge command at the sample the
-//!   test sends it): the status, detail and alarm frames it gives (8 bytes
-//!   each, E2E-protected with counter 0), 24 bytes per sample.
+//!   test sends it): the status, detail, alarm and sensitivity frames it
+//!   gives (8 bytes each, E2E-protected with counter 0), 32 bytes per
+//!   sample.
 //!
 //! and a Rust source with one `EmuCase` per golden case (the list of
 //! alarm changes, the monitor's events, the sample at which the test
@@ -43,7 +44,7 @@ pub const SCANS: u16 = boards::selected::SCANS_PER_SAMPLE as u16;
 /// Sample period, µs, from the board map.
 pub const SAMPLE_PERIOD_US: u32 = boards::selected::SAMPLE_PERIOD_US;
 /// Bytes per sample in `NAME.reference.bin`.
-pub const REFERENCE_RECORD: usize = 24;
+pub const REFERENCE_RECORD: usize = 32;
 /// The acknowledge command is applied this long after the last alarm
 /// change of the run without it, ms.
 const ACK_AFTER_MS: u32 = 200;
@@ -131,6 +132,8 @@ fn run(input: &Input<'_>, codes: &[[u16; 7]], frontend: FrontendConfig, ack: Opt
         out.reference
             .extend(protect(Message::Detail(o.detail_frame())));
         out.reference.extend(protect(Message::Alarm(o.alarm_frame)));
+        out.reference
+            .extend(protect(Message::Sensitivity(o.sensitivity_frame())));
     }
     out
 }

@@ -127,6 +127,9 @@ pub async fn run<S: SampleSource, R: RelayOutput, C: CycleCounter>(
         if out.due.detail {
             shared.post(Message::Detail(out.detail_frame()));
         }
+        if out.due.sensitivity {
+            shared.post(Message::Sensitivity(out.sensitivity_frame()));
+        }
         if out.due.heartbeat {
             let report = estimator.take_load_report();
             let dropped = shared.can.dropped.load(Ordering::Relaxed);

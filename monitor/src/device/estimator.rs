@@ -26,7 +26,7 @@ use crate::device::diagnostics::DeviceFaults;
 use crate::monitor::Monitor;
 use crate::params::{ParamError, Params};
 use crate::protocol::schedule::{Due, FrameScheduler};
-use crate::protocol::{AlarmFrame, Command, DetailFrame, StatusFrame};
+use crate::protocol::{AlarmFrame, Command, DetailFrame, SensitivityFrame, StatusFrame};
 use crate::real::Real;
 use crate::sample::Sample;
 use crate::signal::frontend::{Frontend, FrontendConfig};
@@ -89,6 +89,11 @@ impl Outputs {
     /// The detail frame for this sample.
     pub fn detail_frame(&self) -> DetailFrame {
         DetailFrame::from_status(&self.status)
+    }
+
+    /// The sensitivity frame for this sample.
+    pub fn sensitivity_frame(&self) -> SensitivityFrame {
+        SensitivityFrame::from_status(&self.status)
     }
 }
 
@@ -279,6 +284,7 @@ mod tests {
         assert!(out.first && out.t_ms == 0 && out.lost.is_none());
         assert!(!out.relay_energised());
         assert!(out.due.alarm && out.due.status && out.due.detail && out.due.heartbeat);
+        assert!(out.due.sensitivity);
         let out = e.on_block(&[0; 28], &Inputs::default());
         assert!(!out.first);
         assert_eq!(out.t_ms, 1);

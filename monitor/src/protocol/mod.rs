@@ -16,11 +16,12 @@
 //! | 0x304 | [`ChallengeFrame`] | at once when it changes, and every 1 s |
 //! | 0x305 | [`IdentityFrame`] | every 1 s: node, active parameter set |
 //! | 0x306 | [`VersionFrame`] | every 1 s: firmware version |
+//! | 0x307 | [`SensitivityFrame`] | every 1 s: the alarm level in use per leak (what `healthy` vouches for), evidence weight |
 //! | 0x310 | [`CommandFrame`] | received: acknowledge a latched alarm, authenticated over the current challenge ([`auth`]) |
 //!
 //! The identifiers are node 0's. On a bus shared by several monitors each
 //! has a node number ([`Node`], 0..=7, from the parameters' `can.node`)
-//! that moves its whole block by `0x20 · node` (node 3: 0x360–0x364 and
+//! that moves its whole block by `0x20 · node` (node 3: 0x360–0x367 and
 //! the command at 0x370); the E2E Data ID and the acknowledge MAC use the
 //! moved identifier, so a frame meant for one node fails every check on
 //! another.
@@ -41,6 +42,7 @@ pub mod identity;
 pub mod outbox;
 pub mod p01_receiver;
 pub mod schedule;
+pub mod sensitivity;
 pub mod signal;
 pub mod status;
 
@@ -51,6 +53,7 @@ pub use detail::DetailFrame;
 pub use e2e::{E2eError, Sequence};
 pub use heartbeat::{HeartbeatFrame, ResetCause};
 pub use identity::{IdentityFrame, VersionFrame};
+pub use sensitivity::SensitivityFrame;
 pub use signal::{Signal, SignalValue, Signals};
 pub use status::StatusFrame;
 
@@ -117,13 +120,15 @@ pub enum MessageKind {
     Identity = 5,
     /// Firmware version.
     Version = 6,
+    /// Alarm level in use per leak, evidence weight.
+    Sensitivity = 7,
     /// Received command (acknowledge alarm).
-    Command = 7,
+    Command = 8,
 }
 
 impl MessageKind {
     /// Every kind, in identifier order.
-    pub const ALL: [MessageKind; 8] = [
+    pub const ALL: [MessageKind; 9] = [
         Self::Alarm,
         Self::Status,
         Self::Detail,
@@ -131,6 +136,7 @@ impl MessageKind {
         Self::Challenge,
         Self::Identity,
         Self::Version,
+        Self::Sensitivity,
         Self::Command,
     ];
 
@@ -147,6 +153,7 @@ impl MessageKind {
             Self::Challenge => 0x304,
             Self::Identity => 0x305,
             Self::Version => 0x306,
+            Self::Sensitivity => 0x307,
             Self::Command => 0x310,
         }
     }
@@ -180,6 +187,7 @@ impl MessageKind {
             Self::Challenge => "LM_Challenge",
             Self::Identity => "LM_Identity",
             Self::Version => "LM_Version",
+            Self::Sensitivity => "LM_Sensitivity",
             Self::Command => "LM_Command",
         }
     }
@@ -276,6 +284,8 @@ pub enum Message {
     Identity(IdentityFrame),
     /// Version.
     Version(VersionFrame),
+    /// Sensitivity.
+    Sensitivity(SensitivityFrame),
     /// Command.
     Command(CommandFrame),
 }
@@ -291,6 +301,7 @@ impl Message {
             Self::Challenge(_) => MessageKind::Challenge,
             Self::Identity(_) => MessageKind::Identity,
             Self::Version(_) => MessageKind::Version,
+            Self::Sensitivity(_) => MessageKind::Sensitivity,
             Self::Command(_) => MessageKind::Command,
         }
     }
@@ -305,6 +316,7 @@ impl Message {
             Self::Challenge(m) => m.signals(),
             Self::Identity(m) => m.signals(),
             Self::Version(m) => m.signals(),
+            Self::Sensitivity(m) => m.signals(),
             Self::Command(m) => m.signals(),
         }
     }
@@ -318,6 +330,7 @@ impl Message {
             Self::Challenge(m) => m.write(d),
             Self::Identity(m) => m.write(d),
             Self::Version(m) => m.write(d),
+            Self::Sensitivity(m) => m.write(d),
             Self::Command(m) => m.write(d),
         }
     }
@@ -331,6 +344,7 @@ impl Message {
             MessageKind::Challenge => Self::Challenge(ChallengeFrame::read(d)?),
             MessageKind::Identity => Self::Identity(IdentityFrame::read(d)?),
             MessageKind::Version => Self::Version(VersionFrame::read(d)?),
+            MessageKind::Sensitivity => Self::Sensitivity(SensitivityFrame::read(d)?),
             MessageKind::Command => Self::Command(CommandFrame::read(d)?),
         })
     }

@@ -1,17 +1,20 @@
 //! When each frame is due, given the sample clock: status every 100 ms,
-//! detail, heartbeat, identity and version every second (staggered so they
-//! do not share a millisecond with each other), the alarm frame at once on
+//! detail, sensitivity, heartbeat, identity and version every second
+//! (staggered so they do not share a millisecond with each other), the alarm frame at once on
 //! a change of the alarm output and every second as a refresh for late
 //! listeners.
 
 /// Status frame period, ms.
 pub const STATUS_PERIOD_MS: u64 = 100;
-/// Detail, heartbeat and alarm-refresh period, ms.
+/// Detail, sensitivity, heartbeat, identity, version and alarm-refresh
+/// period, ms.
 pub const SLOW_PERIOD_MS: u64 = 1000;
 /// Phase of the heartbeat within the second, ms.
 pub const HEARTBEAT_PHASE_MS: u64 = 250;
 /// Phase of the detail frame within the second, ms.
 pub const DETAIL_PHASE_MS: u64 = 550;
+/// Phase of the sensitivity frame within the second, ms.
+pub const SENSITIVITY_PHASE_MS: u64 = 650;
 /// Phase of the alarm refresh within the second, ms.
 pub const ALARM_REFRESH_PHASE_MS: u64 = 750;
 /// Phase of the identity frame within the second, ms.
@@ -35,6 +38,8 @@ pub struct Due {
     pub identity: bool,
     /// Version frame.
     pub version: bool,
+    /// Sensitivity frame.
+    pub sensitivity: bool,
 }
 
 /// Frame scheduler.
@@ -70,6 +75,7 @@ impl FrameScheduler {
                 heartbeat: crossed(last, t_ms, SLOW_PERIOD_MS, HEARTBEAT_PHASE_MS),
                 identity: crossed(last, t_ms, SLOW_PERIOD_MS, IDENTITY_PHASE_MS),
                 version: crossed(last, t_ms, SLOW_PERIOD_MS, VERSION_PHASE_MS),
+                sensitivity: crossed(last, t_ms, SLOW_PERIOD_MS, SENSITIVITY_PHASE_MS),
             },
             None => Due {
                 alarm: true,
@@ -78,6 +84,7 @@ impl FrameScheduler {
                 heartbeat: true,
                 identity: true,
                 version: true,
+                sensitivity: true,
             },
         };
         if self.last_ms.is_none_or(|last| t_ms > last) {
@@ -91,9 +98,9 @@ impl FrameScheduler {
 mod tests {
     use super::*;
 
-    fn run(ms: u64, changes: &[u64]) -> [heapless::Vec<u64, 128>; 6] {
+    fn run(ms: u64, changes: &[u64]) -> [heapless::Vec<u64, 128>; 7] {
         let mut s = FrameScheduler::new();
-        let mut out: [heapless::Vec<u64, 128>; 6] = Default::default();
+        let mut out: [heapless::Vec<u64, 128>; 7] = Default::default();
         for t in 0..ms {
             let d = s.due(t, changes.contains(&t));
             for (i, on) in [
@@ -103,6 +110,7 @@ mod tests {
                 d.heartbeat,
                 d.identity,
                 d.version,
+                d.sensitivity,
             ]
             .into_iter()
             .enumerate()
@@ -117,13 +125,14 @@ mod tests {
 
     #[test]
     fn periods_and_phases() {
-        let [alarm, status, detail, heartbeat, identity, version] = run(3000, &[]);
+        let [alarm, status, detail, heartbeat, identity, version, sensitivity] = run(3000, &[]);
         assert_eq!(status.len(), 30);
         assert!(status.iter().all(|t| t % 100 == 0));
         assert_eq!(heartbeat.as_slice(), &[0, 250, 1250, 2250]);
         assert_eq!(identity.as_slice(), &[0, 850, 1850, 2850]);
         assert_eq!(version.as_slice(), &[0, 950, 1950, 2950]);
         assert_eq!(detail.as_slice(), &[0, 550, 1550, 2550]);
+        assert_eq!(sensitivity.as_slice(), &[0, 650, 1650, 2650]);
         assert_eq!(alarm.as_slice(), &[0, 750, 1750, 2750]);
     }
 
@@ -140,7 +149,16 @@ mod tests {
         s.due(95, false);
         // 95 → 1305 crosses 100..1300 (status), 250 and 1250 (heartbeat once).
         let d = s.due(1305, false);
-        assert!(d.status && d.heartbeat && d.detail && d.alarm && d.identity && d.version);
+        let every = [
+            d.status,
+            d.heartbeat,
+            d.detail,
+            d.alarm,
+            d.identity,
+            d.version,
+            d.sensitivity,
+        ];
+        assert!(every.iter().all(|&due| due), "{d:?}");
         let d = s.due(1306, false);
         assert_eq!(d, Due::default());
         // Time that does not advance sends nothing periodic.

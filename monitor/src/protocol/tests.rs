@@ -56,6 +56,11 @@ pub(crate) fn one_of_each() -> [Message; MessageKind::COUNT] {
             firmware: [3, 14, 15],
             link_protocol: 2,
         }),
+        Message::Sensitivity(SensitivityFrame {
+            alarm_level_internal_ml_min: Some(80),
+            alarm_level_external_ml_min: Some(1700),
+            evidence_weight_pct: Some(63),
+        }),
         Message::Command(CommandFrame {
             command: Command::AcknowledgeAlarm,
             mac: [0xA0, 0xB1, 0xC2, 0xD3, 0xE4, 0xF5],
@@ -112,6 +117,16 @@ fn not_available_and_extreme_values_round_trip() {
             missed_samples: 255,
             adc_overruns: 0,
             can_tx_dropped: 0,
+        }),
+        Message::Sensitivity(SensitivityFrame {
+            alarm_level_internal_ml_min: None,
+            alarm_level_external_ml_min: Some(sensitivity::LEVEL_MAX_ML_MIN),
+            evidence_weight_pct: None,
+        }),
+        Message::Sensitivity(SensitivityFrame {
+            alarm_level_internal_ml_min: Some(0),
+            alarm_level_external_ml_min: None,
+            evidence_weight_pct: Some(sensitivity::WEIGHT_MAX_PCT),
         }),
     ];
     for msg in msgs {
@@ -359,6 +374,16 @@ fn foreign_and_malformed_frames_are_rejected() {
             ..
         })
     ));
+    assert!(matches!(
+        field(0x307, [0, 0x00, 0, 0, 0, 0, 101, 0]),
+        Err(DecodeError::Field {
+            error: FieldError {
+                field: "EvidenceWeight",
+                raw: 101
+            },
+            ..
+        })
+    ));
     // Any tag decodes (the decoder does not check it).
     assert!(field(0x310, [0, 0x10, 0, 0, 0, 0, 0, 1]).is_ok());
 }
@@ -424,6 +449,42 @@ fn detail_values_are_rounded_and_saturated() {
 }
 
 #[test]
+fn sensitivity_values_are_rounded_and_saturated() {
+    let mut s = testutil::status();
+    s.leak_internal_lpm = Some(0.0);
+    s.leak_external_lpm = Some(0.0);
+    s.alarm_level_lpm = [0.0804, 1.6996];
+    s.evidence_weight = 0.634;
+    let f = SensitivityFrame::from_status(&s);
+    assert_eq!(f.alarm_level_internal_ml_min, Some(80));
+    assert_eq!(f.alarm_level_external_ml_min, Some(1700));
+    assert_eq!(f.evidence_weight_pct, Some(63));
+    s.alarm_level_lpm = [1e6, -1.0];
+    s.evidence_weight = 1.2;
+    let f = SensitivityFrame::from_status(&s);
+    assert_eq!(
+        f.alarm_level_internal_ml_min,
+        Some(sensitivity::LEVEL_MAX_ML_MIN)
+    );
+    assert_eq!(f.alarm_level_external_ml_min, Some(0));
+    assert_eq!(f.evidence_weight_pct, Some(sensitivity::WEIGHT_MAX_PCT));
+    // Without a leak estimate (warming up, a sensor fault) no level is
+    // published; a NaN is not available either.
+    s.leak_internal_lpm = None;
+    s.alarm_level_lpm[1] = f32::NAN;
+    s.evidence_weight = f32::NAN;
+    let f = SensitivityFrame::from_status(&s);
+    assert_eq!(
+        (
+            f.alarm_level_internal_ml_min,
+            f.alarm_level_external_ml_min,
+            f.evidence_weight_pct
+        ),
+        (None, None, None)
+    );
+}
+
+#[test]
 fn heartbeat_nibbles_saturate() {
     let msg = Message::Heartbeat(HeartbeatFrame {
         reset_cause: ResetCause::PowerOn,
@@ -443,7 +504,8 @@ fn heartbeat_nibbles_saturate() {
 
 #[test]
 fn signals_name_every_field_with_its_physical_value() {
-    let [alarm, status, detail, heartbeat, challenge, identity, version, command] = one_of_each();
+    let [alarm, status, detail, heartbeat, challenge, identity, version, sensitivity, command] =
+        one_of_each();
     let names = |m: &Message| -> heapless::Vec<&'static str, 12> {
         m.signals().iter().map(|s| s.name).collect()
     };
@@ -505,6 +567,14 @@ fn signals_name_every_field_with_its_physical_value() {
         identity.signals()[1].value.physical(),
         Some(f64::from(0xFEDC_BA98_u32))
     );
+    assert_eq!(
+        names(&sensitivity).as_slice(),
+        ["AlarmLevelInternal", "AlarmLevelExternal", "EvidenceWeight"]
+    );
+    let v = sensitivity.signals();
+    assert_eq!(v[0].value.physical(), Some(0.08));
+    assert_eq!(v[1].value.physical(), Some(1.7));
+    assert_eq!(v[2].value.physical(), Some(63.0));
     assert_eq!(names(&command).as_slice(), ["Command", "Mac"]);
     assert_eq!(
         command.signals()[1].value.physical(),
@@ -521,6 +591,8 @@ fn signals_name_every_field_with_its_physical_value() {
     assert_eq!(s[2].to_string(), "LeakExternal=0.385 l/min");
     assert_eq!(s[0].to_string(), "Verdict=external");
     assert_eq!(d[2].to_string(), "LeakExternalSd=n/a");
+    assert_eq!(v[1].to_string(), "AlarmLevelExternal=1.700 l/min");
+    assert_eq!(v[2].to_string(), "EvidenceWeight=63 %");
 }
 
 #[test]
@@ -547,7 +619,8 @@ fn a_node_number_moves_the_whole_block() {
         }
     }
     assert_eq!(MessageKind::Command.id_at(Node::new(7).unwrap()), 0x3F0);
-    for id in [0x000, 0x2FF, 0x307, 0x30F, 0x311, 0x31F, 0x400, 0x7FF] {
+    assert_eq!(MessageKind::Sensitivity.id_at(n3), 0x367);
+    for id in [0x000, 0x2FF, 0x308, 0x30F, 0x311, 0x31F, 0x400, 0x7FF] {
         assert_eq!(MessageKind::locate(id), None, "{id:#x}");
     }
 }

@@ -3,14 +3,14 @@
 
 use golden::canon;
 use monitor::protocol::{
-    AlarmFrame, CanFrame, Decoder, DetailFrame, Message, MessageKind, StatusFrame,
+    AlarmFrame, CanFrame, Decoder, DetailFrame, Message, MessageKind, SensitivityFrame, StatusFrame,
 };
 use monitor::signal::frontend::CHANNELS;
 use monitor::{Event, Verdict};
 
-/// Bytes per sample of [`EmuCase::reference`]: status, detail and alarm
-/// frames.
-const REFERENCE_RECORD: usize = 24;
+/// Bytes per sample of [`EmuCase::reference`]: status, detail, alarm and
+/// sensitivity frames.
+const REFERENCE_RECORD: usize = 32;
 
 /// One golden case on the emulated board.
 #[derive(Debug)]
@@ -31,8 +31,8 @@ pub struct EmuCase {
     pub scans: u16,
     /// Per sample and channel, the sum of the scans' ADC codes (u16 LE).
     pub codes: &'static [u8],
-    /// Per sample, the host's status, detail and alarm frames (8 bytes
-    /// each, counter 0).
+    /// Per sample, the host's status, detail, alarm and sensitivity frames
+    /// (8 bytes each, counter 0).
     pub reference: &'static [u8],
     /// The sample at which the acknowledge command is to be applied
     /// (`None`: no command is sent).
@@ -60,6 +60,8 @@ pub struct Reference {
     pub detail: DetailFrame,
     /// `LM_Alarm` after the alarm logic's update.
     pub alarm: AlarmFrame,
+    /// `LM_Sensitivity` built from that sample's status.
+    pub sensitivity: SensitivityFrame,
 }
 
 /// Decode a stored reference frame of `kind`.
@@ -87,14 +89,19 @@ impl EmuCase {
             decode(MessageKind::Status, &r[0..8]),
             decode(MessageKind::Detail, &r[8..16]),
             decode(MessageKind::Alarm, &r[16..24]),
+            decode(MessageKind::Sensitivity, &r[24..32]),
         ) {
-            (Message::Status(status), Message::Detail(detail), Message::Alarm(alarm)) => {
-                Reference {
-                    status,
-                    detail,
-                    alarm,
-                }
-            }
+            (
+                Message::Status(status),
+                Message::Detail(detail),
+                Message::Alarm(alarm),
+                Message::Sensitivity(sensitivity),
+            ) => Reference {
+                status,
+                detail,
+                alarm,
+                sensitivity,
+            },
             other => panic!("reference record {k} holds {other:?}"),
         }
     }

@@ -1,9 +1,9 @@
 //! The CAN frames: each decodes (CRC, fields) with consecutive counters
 //! per identifier; each kind is sent exactly at the samples its schedule
 //! says (`monitor::protocol::schedule`: status every 100 ms, detail,
-//! heartbeat, identity and version every second, alarm every second and at
-//! once on a change); status, detail and alarm frames hold exactly what the
-//! host computed for that sample, identity and version what the board
+//! sensitivity, heartbeat, identity and version every second, alarm every
+//! second and at once on a change); status, detail, sensitivity and alarm
+//! frames hold exactly what the host computed for that sample, identity and version what the board
 //! booted with; heartbeats report no missed samples, overruns or
 //! dropped frames; after the last sample, exactly one frame: the alarm
 //! frame announcing the stalled estimator, 20–30 ms later (two
@@ -14,8 +14,8 @@ use firmware::app::supervisor::CHECK_PERIOD;
 use heapless::Vec;
 use monitor::device::alarm::AlarmState;
 use monitor::protocol::schedule::{
-    ALARM_REFRESH_PHASE_MS, DETAIL_PHASE_MS, HEARTBEAT_PHASE_MS, IDENTITY_PHASE_MS, SLOW_PERIOD_MS,
-    STATUS_PERIOD_MS, VERSION_PHASE_MS,
+    ALARM_REFRESH_PHASE_MS, DETAIL_PHASE_MS, HEARTBEAT_PHASE_MS, IDENTITY_PHASE_MS,
+    SENSITIVITY_PHASE_MS, SLOW_PERIOD_MS, STATUS_PERIOD_MS, VERSION_PHASE_MS,
 };
 use monitor::protocol::{
     AlarmFrame, Decoder, HeartbeatFrame, Message, MessageKind, Node, Sequence,
@@ -67,6 +67,7 @@ fn due(kind: MessageKind, t_ms: u64, changed: bool) -> bool {
         MessageKind::Heartbeat => slow(HEARTBEAT_PHASE_MS),
         MessageKind::Identity => slow(IDENTITY_PHASE_MS),
         MessageKind::Version => slow(VERSION_PHASE_MS),
+        MessageKind::Sensitivity => slow(SENSITIVITY_PHASE_MS),
         // Sent by the CAN receiver task on its own clock.
         MessageKind::Challenge | MessageKind::Command => false,
     }
@@ -163,6 +164,7 @@ fn kind(case: &EmuCase, frames: &Frames, kind: MessageKind, expect: &Expect, f: 
                     }
                     Message::Identity(i) => i == expect.identity,
                     Message::Version(v) => v == expect.version,
+                    Message::Sensitivity(s) => s == r.sensitivity,
                     Message::Challenge(_) | Message::Command(_) => false,
                 };
                 if !same {
@@ -171,6 +173,7 @@ fn kind(case: &EmuCase, frames: &Frames, kind: MessageKind, expect: &Expect, f: 
                         MessageKind::Detail => Message::Detail(r.detail),
                         MessageKind::Identity => Message::Identity(expect.identity),
                         MessageKind::Version => Message::Version(expect.version),
+                        MessageKind::Sensitivity => Message::Sensitivity(r.sensitivity),
                         _ => Message::Alarm(r.alarm),
                     };
                     f.fail(
@@ -257,6 +260,7 @@ pub fn check(case: &EmuCase, log: &Log, expect: &Expect, f: &mut Findings) -> Fr
         MessageKind::Heartbeat,
         MessageKind::Identity,
         MessageKind::Version,
+        MessageKind::Sensitivity,
     ] {
         kind(case, &frames, k, expect, f);
     }
@@ -285,23 +289,26 @@ pub fn check(case: &EmuCase, log: &Log, expect: &Expect, f: &mut Findings) -> Fr
 }
 
 /// Print the frame sequence: counts per kind, every alarm frame and
-/// heartbeat, and the status frames whose verdict or health changed.
+/// heartbeat, the status frames whose verdict or health changed and the
+/// sensitivity frames whose alarm levels changed.
 pub fn print(frames: &Frames, f: &Findings) {
     if f.quiet {
         return;
     }
     let count = |kind: MessageKind| frames.list.iter().filter(|d| d.msg.kind() == kind).count();
     f.note(format_args!(
-        "frames: {} decoded: alarm {}, status {}, detail {}, heartbeat {}, identity {}, version {}",
+        "frames: {} decoded: alarm {}, status {}, detail {}, heartbeat {}, identity {}, version {}, sensitivity {}",
         frames.list.len(),
         count(MessageKind::Alarm),
         count(MessageKind::Status),
         count(MessageKind::Detail),
         count(MessageKind::Heartbeat),
         count(MessageKind::Identity),
-        count(MessageKind::Version)
+        count(MessageKind::Version),
+        count(MessageKind::Sensitivity)
     ));
     let mut last_status = None;
+    let mut last_levels = None;
     for d in &frames.list {
         let k = d.k.unwrap_or(u32::MAX);
         match d.msg {
@@ -332,6 +339,16 @@ pub fn print(frames: &Frames, f: &Findings) {
                     s.leak_internal_ml_min,
                     s.leak_external_ml_min
                 ))
+            }
+            Message::Sensitivity(s) => {
+                let levels = (s.alarm_level_internal_ml_min, s.alarm_level_external_ml_min);
+                if last_levels != Some(levels) {
+                    last_levels = Some(levels);
+                    f.note(format_args!(
+                        "  sample {k:>5} sensitivity: alarm level internal {:?} external {:?} ml/min, evidence weight {:?} %",
+                        levels.0, levels.1, s.evidence_weight_pct
+                    ))
+                }
             }
             _ => {}
         }
