@@ -108,6 +108,15 @@ pub struct ReplaySummary {
     /// above which alone leaks alarm, l/min; the verdict is never
     /// `healthy`. `null`: the parameters describe the installation.
     pub provisional_floor_lpm: Option<f64>,
+    /// Alarm level in use for the internal leak at the end, l/min: the
+    /// smallest leak flow (after the healthy baseline) that could raise an
+    /// alarm there, the user's level raised to the installation's floor in
+    /// the operating region (`Status::alarm_level_lpm`); what a `healthy`
+    /// verdict vouches for. Taken with the leak estimates (`null` where
+    /// they are).
+    pub alarm_level_internal_lpm: Option<f64>,
+    /// Alarm level in use for the external leak at the end, l/min.
+    pub alarm_level_external_lpm: Option<f64>,
 }
 
 /// Most events a replay keeps in its summary.
@@ -260,6 +269,8 @@ pub fn replay<T: Real, R: BufRead>(
         provisional_floor_lpm: params
             .is_provisional()
             .then_some(params.baseline.provisional_floor_lpm),
+        alarm_level_internal_lpm: None,
+        alarm_level_external_lpm: None,
     };
     let (mut inconclusive, mut nis_sum, mut nis_n) = (0u64, 0.0, 0u64);
     let t0 = first.as_ref().map(|s| s.t_s);
@@ -300,6 +311,9 @@ pub fn replay<T: Real, R: BufRead>(
             summary.leak_external_lpm = Some(round4(e as f64));
             summary.leak_internal_sd_lpm = status.leak_internal_sd_lpm.map(|v| round4(v as f64));
             summary.leak_external_sd_lpm = status.leak_external_sd_lpm.map(|v| round4(v as f64));
+            let [li, le] = status.alarm_level_lpm;
+            summary.alarm_level_internal_lpm = Some(round4(li as f64));
+            summary.alarm_level_external_lpm = Some(round4(le as f64));
         }
         for e in &status.events {
             if matches!(e, Event::AlarmRaised(_)) && summary.first_alarm_s.is_none() {
@@ -346,6 +360,12 @@ pub fn print_summary(s: &ReplaySummary, out: &mut dyn Write) -> std::io::Result<
         "leak size   internal {}, external {}",
         fmt(s.leak_internal_lpm, s.leak_internal_sd_lpm),
         fmt(s.leak_external_lpm, s.leak_external_sd_lpm)
+    )?;
+    writeln!(
+        out,
+        "alarm level internal {}, external {}",
+        fmt(s.alarm_level_internal_lpm, None),
+        fmt(s.alarm_level_external_lpm, None)
     )?;
     let p = s.probabilities;
     writeln!(

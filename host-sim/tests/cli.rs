@@ -132,11 +132,81 @@ fn replay_json_has_the_contract_fields() {
     assert_eq!(v["verdict"], "sensor_fault");
     assert!(v["first_alarm_s"].is_null());
     assert!(v.get("leak_internal_lpm").is_some() && v.get("leak_external_lpm").is_some());
+    // Provisional (no --params): the level in use is the gross one.
+    assert_eq!(v["alarm_level_internal_lpm"], 5.0);
+    assert_eq!(v["alarm_level_external_lpm"], 5.0);
     let events = v["events"].as_array().unwrap();
     assert_eq!(events.len(), 1);
     assert_eq!(events[0]["kind"], "sensor_fault");
     assert_eq!(events[0]["sensor"], "p_piston");
     assert!((events[0]["t"].as_f64().unwrap() - 3.0).abs() < 1e-9);
+}
+
+/// The alarm level in use at the end: the user's (0.08 l/min) on the
+/// reference rig, raised to the installation's floor in the region the
+/// recording ends in (extending), `null` without a leak estimate.
+#[test]
+fn replay_names_the_alarm_level_in_use() {
+    let dir = tempfile::tempdir().unwrap();
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples");
+    let rec = root.join("healthy.csv.gz");
+    let reference = root.join("reference-rig.toml");
+    // The reference rig's set with detection floors while extending only.
+    let floored = format!(
+        "{}region_floor_internal_lpm = [0.0, 0.0, 0.3]\nregion_floor_external_lpm = [0.0, 0.0, 0.69]\n",
+        std::fs::read_to_string(&reference).unwrap()
+    );
+    let floored = write(dir.path(), "floored.toml", &floored);
+    let json = |params: &Path| {
+        let out = host_sim_ok(&[
+            "replay",
+            "--json",
+            "--params",
+            params.to_str().unwrap(),
+            rec.to_str().unwrap(),
+        ]);
+        serde_json::from_slice::<serde_json::Value>(&out.stdout).unwrap()
+    };
+    let v = json(&reference);
+    assert_eq!(v["verdict"], "healthy");
+    assert_eq!(v["alarm_level_internal_lpm"], 0.08);
+    assert_eq!(v["alarm_level_external_lpm"], 0.08);
+    // The recording ends extending: that region's floors.
+    let zcat = |p: &Path| {
+        let f = std::fs::File::open(p).unwrap();
+        let mut s = String::new();
+        std::io::Read::read_to_string(&mut flate2::read::GzDecoder::new(f), &mut s).unwrap();
+        s
+    };
+    let last = zcat(&rec).lines().last().unwrap().to_string();
+    let u_end: f64 = last.rsplit(',').next().unwrap().parse().unwrap();
+    assert!(u_end > 0.05, "the recording ends extending: {last}");
+    let v = json(&floored);
+    assert_eq!(v["verdict"], "healthy");
+    assert_eq!(v["alarm_level_internal_lpm"], 0.3);
+    assert_eq!(v["alarm_level_external_lpm"], 0.69);
+    let out = host_sim_ok(&[
+        "replay",
+        "--params",
+        floored.to_str().unwrap(),
+        rec.to_str().unwrap(),
+    ]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("alarm level internal 0.300 l/min, external 0.690 l/min"),
+        "{text}"
+    );
+    // One sample: no estimate, no level.
+    let one = write(dir.path(), "one.csv", &format!("{HEADER}{ROW0}"));
+    let out = host_sim_ok(&["replay", "--json", one.to_str().unwrap()]);
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    for k in [
+        "leak_internal_lpm",
+        "alarm_level_internal_lpm",
+        "alarm_level_external_lpm",
+    ] {
+        assert!(v.get(k).is_some_and(|x| x.is_null()), "{k}: {v}");
+    }
 }
 
 #[test]
