@@ -337,24 +337,6 @@ fn record(f: &LogFrame, nodes: &mut Nodes) -> FrameRecord {
     r
 }
 
-/// Names of the health bits (`monitor::status::health`).
-const HEALTH_FLAGS: [(u16, &str); 11] = {
-    use monitor::status::health::*;
-    [
-        (WARMING_UP, "WARMING_UP"),
-        (EVIDENCE_PAUSED, "EVIDENCE_PAUSED"),
-        (DATA_GAP, "DATA_GAP"),
-        (FILTER_RESET, "FILTER_RESET"),
-        (SENSOR_FAULT, "SENSOR_FAULT"),
-        (LEAK_WARNING, "LEAK_WARNING"),
-        (ALARM_LATCHED, "ALARM_LATCHED"),
-        (MODEL_MISMATCH, "MODEL_MISMATCH"),
-        (TIME_NOT_INCREASING, "TIME_NOT_INCREASING"),
-        (INCONCLUSIVE, "INCONCLUSIVE"),
-        (OUTLIER, "OUTLIER"),
-    ]
-};
-
 /// The set bits of a bit-mask signal by name (unknown bits as `BITn`);
 /// `None` for other signals.
 fn flag_names(s: &Signal) -> Option<Vec<String>> {
@@ -364,7 +346,7 @@ fn flag_names(s: &Signal) -> Option<Vec<String>> {
     let name = |bit: u32| -> String {
         let mask = 1u32 << bit;
         let known = match s.name {
-            "Health" => HEALTH_FLAGS
+            "Health" => monitor::status::health::NAMES
                 .iter()
                 .find(|(m, _)| u32::from(*m) == mask)
                 .map(|(_, n)| *n),

@@ -121,6 +121,24 @@ pub mod health {
     /// installation: never `healthy`, and only gross leaks alarm
     /// (`baseline.provisional_floor_lpm`).
     pub const PROVISIONAL: u16 = 1 << 12;
+
+    /// Every flag above with its name (as the CAN decoder and logs show
+    /// it), in bit order. A new flag goes here too.
+    pub const NAMES: [(u16, &str); 13] = [
+        (WARMING_UP, "WARMING_UP"),
+        (EVIDENCE_PAUSED, "EVIDENCE_PAUSED"),
+        (DATA_GAP, "DATA_GAP"),
+        (FILTER_RESET, "FILTER_RESET"),
+        (SENSOR_FAULT, "SENSOR_FAULT"),
+        (LEAK_WARNING, "LEAK_WARNING"),
+        (ALARM_LATCHED, "ALARM_LATCHED"),
+        (MODEL_MISMATCH, "MODEL_MISMATCH"),
+        (TIME_NOT_INCREASING, "TIME_NOT_INCREASING"),
+        (INCONCLUSIVE, "INCONCLUSIVE"),
+        (OUTLIER, "OUTLIER"),
+        (ACK_EVIDENCE, "ACK_EVIDENCE"),
+        (PROVISIONAL, "PROVISIONAL"),
+    ];
 }
 
 /// Something that happened at this sample.
@@ -227,5 +245,17 @@ impl Status {
     /// is [`valve_model_misfit`](Self::valve_model_misfit)'s question.
     pub fn quasi_steady(&self) -> bool {
         f64::from(self.evidence_weight) >= PAUSED_WEIGHT
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::health;
+
+    #[test]
+    fn every_health_flag_has_a_name_in_bit_order() {
+        for (bit, (mask, name)) in health::NAMES.iter().enumerate() {
+            assert_eq!(*mask, 1 << bit, "{name}");
+        }
     }
 }

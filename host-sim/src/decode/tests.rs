@@ -81,7 +81,11 @@ fn health_and_faulted_channels_by_name() {
         "Health=WARMING_UP|ALARM_LATCHED"
     );
     assert_eq!(describe(&s("Health", 0)), "Health=none");
-    assert_eq!(describe(&s("Health", 1 << 12)), "Health=BIT12");
+    assert_eq!(
+        describe(&s("Health", 3 << 11)),
+        "Health=ACK_EVIDENCE|PROVISIONAL"
+    );
+    assert_eq!(describe(&s("Health", 1 << 13)), "Health=BIT13");
     assert_eq!(
         describe(&s("FaultedChannels", 0b110)),
         "FaultedChannels=p_piston|p_rod"
