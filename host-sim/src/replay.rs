@@ -109,11 +109,11 @@ pub struct ReplaySummary {
     /// `healthy`. `null`: the parameters describe the installation.
     pub provisional_floor_lpm: Option<f64>,
     /// Alarm level in use for the internal leak at the end, l/min: the
-    /// smallest leak flow (after the healthy baseline) that could raise an
-    /// alarm there, the user's level raised to the installation's floor in
-    /// the operating region (`Status::alarm_level_lpm`); what a `healthy`
-    /// verdict vouches for. Taken with the leak estimates (`null` where
-    /// they are).
+    /// level a leak flow estimate (after the healthy baseline) had to
+    /// exceed to raise an alarm there, the user's level raised to the
+    /// installation's floor in the operating region
+    /// (`Status::alarm_level_lpm`): what a `healthy` verdict is measured
+    /// against. Taken with the leak estimates (`null` where they are).
     pub alarm_level_internal_lpm: Option<f64>,
     /// Alarm level in use for the external leak at the end, l/min.
     pub alarm_level_external_lpm: Option<f64>,

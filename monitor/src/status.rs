@@ -191,14 +191,16 @@ pub struct Status {
     /// External leak flow averaged over the detection window, l/min.
     pub detect_external_lpm: Option<f32>,
     /// Alarm level in use for the internal and external leak, l/min: the
-    /// smallest leak flow, after the healthy baseline, that can raise an
-    /// alarm at this sample (its estimate less 2σ must stay above it for
-    /// the debounce time) —
-    /// the user's `alarm.alarm_lpm` raised to the installation's detection
-    /// floor in the current operating region (`baseline.region_floor_*`,
-    /// `detection_floor_lpm`, a provisional set's `provisional_floor_lpm`).
-    /// It is what a `Healthy` verdict vouches for: no leak above it. After
-    /// a region with a higher floor it falls with a 0.5 s time constant.
+    /// level the leak flow estimate, after the healthy baseline and less
+    /// 2σ, must stay above for the debounce time to raise an alarm at this
+    /// sample: the user's `alarm.alarm_lpm` raised to the installation's
+    /// detection floor in the current operating region
+    /// (`baseline.region_floor_*`, `detection_floor_lpm`, a provisional
+    /// set's `provisional_floor_lpm`). A `Healthy` verdict says no leak
+    /// *estimate* above it; on an installation the model describes poorly
+    /// the estimates run low (docs/evaluation.md), so a leak a little above
+    /// it can still go unseen. After a region with a higher floor it falls
+    /// with a 0.5 s time constant.
     pub alarm_level_lpm: [f32; 2],
     /// Estimated valve flow-gain deviations from the parameters for the
     /// extend and retract directions, relative (0.05: the valve passes 5 %

@@ -16,7 +16,7 @@
 //! | 0x304 | [`ChallengeFrame`] | at once when it changes, and every 1 s |
 //! | 0x305 | [`IdentityFrame`] | every 1 s: node, active parameter set |
 //! | 0x306 | [`VersionFrame`] | every 1 s: firmware version |
-//! | 0x307 | [`SensitivityFrame`] | every 1 s: the alarm level in use per leak (what `healthy` vouches for), evidence weight |
+//! | 0x307 | [`SensitivityFrame`] | every 1 s: the alarm level in use per leak (what `healthy` is measured against), evidence weight |
 //! | 0x310 | [`CommandFrame`] | received: acknowledge a latched alarm, authenticated over the current challenge ([`auth`]) |
 //!
 //! The identifiers are node 0's. On a bus shared by several monitors each

@@ -1,6 +1,6 @@
-//! Sensitivity frame `LM_Sensitivity` (0x307, every second): the leak size
-//! the monitor can detect right now, i.e. what a `healthy` verdict vouches
-//! for — per leak the alarm level in use (the user's, raised to the
+//! Sensitivity frame `LM_Sensitivity` (0x307, every second): the level a
+//! leak estimate must exceed to alarm right now, i.e. what a `healthy`
+//! verdict is measured against — per leak the alarm level in use (the user's, raised to the
 //! installation's floor in the current operating region,
 //! [`Status::alarm_level_lpm`]) — and the current evidence weight.
 //!
