@@ -140,7 +140,8 @@ pub const UNBOUNDED_LAMINAR_FACTOR: f64 = -5.0;
 /// alarmed on none of its healthy runs calibrated, on all three refused
 /// (2 l/min before).
 pub const MAX_DETECTION_FLOOR_LPM: f64 = 3.0;
-/// Fraction of the held-out time with evidence weight > 0.5 below which
+/// Fraction of the held-out time quasi-steady enough to count as evidence
+/// (`Status::quasi_steady`: evidence weight ≥ 0.5) below which
 /// the validation cannot judge (the monitor barely evaluates evidence).
 /// Healthy: 44–93 % (the lower figures at 0.6 bar).
 pub const MIN_EVIDENCE_FRACTION: f64 = 0.1;

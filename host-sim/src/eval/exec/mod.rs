@@ -170,7 +170,8 @@ pub struct RunResult {
     pub nis_leading_mean: Option<f64>,
     /// The leading hypothesis' mean NIS at the end.
     pub nis_leading_end: f64,
-    /// Fraction of samples with evidence weight > 0.5.
+    /// Fraction of samples quasi-steady enough to count as evidence
+    /// (`Status::quasi_steady`).
     pub evidence_fraction: f64,
     /// Filter resets.
     pub filter_resets: u32,

@@ -54,7 +54,7 @@ pub fn replay_text(spec: &RunSpec, text: &[u8], params: &Params) -> Result<RunRe
             nis_sum += lead;
             nis_n += 1;
         }
-        if s.evidence_weight > 0.5 {
+        if s.quasi_steady() {
             evidence += 1;
         }
         if let (Some(i), Some(e)) = (s.leak_internal_lpm, s.leak_external_lpm) {
