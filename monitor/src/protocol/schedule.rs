@@ -1,8 +1,8 @@
 //! When each frame is due, given the sample clock: status every 100 ms,
 //! detail, sensitivity, heartbeat, identity and version every second
-//! (staggered so they do not share a millisecond with each other), the alarm frame at once on
-//! a change of the alarm output and every second as a refresh for late
-//! listeners.
+//! (staggered so they do not share a millisecond with each other), the
+//! alarm frame at once on a change of the alarm output and every second as
+//! a refresh for late listeners.
 
 /// Status frame period, ms.
 pub const STATUS_PERIOD_MS: u64 = 100;
