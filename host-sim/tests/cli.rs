@@ -172,15 +172,13 @@ fn replay_names_the_alarm_level_in_use() {
     assert_eq!(v["alarm_level_internal_lpm"], 0.08);
     assert_eq!(v["alarm_level_external_lpm"], 0.08);
     // The recording ends extending: that region's floors.
-    let zcat = |p: &Path| {
-        let f = std::fs::File::open(p).unwrap();
-        let mut s = String::new();
-        std::io::Read::read_to_string(&mut flate2::read::GzDecoder::new(f), &mut s).unwrap();
-        s
-    };
-    let last = zcat(&rec).lines().last().unwrap().to_string();
-    let u_end: f64 = last.rsplit(',').next().unwrap().parse().unwrap();
-    assert!(u_end > 0.05, "the recording ends extending: {last}");
+    let last = host_sim::recording::RecordingReader::open(&rec)
+        .unwrap()
+        .last()
+        .unwrap()
+        .unwrap();
+    let u_end = last.u_valve.unwrap();
+    assert!(u_end > 0.05, "the recording ends extending: {last:?}");
     let v = json(&floored);
     assert_eq!(v["verdict"], "healthy");
     assert_eq!(v["alarm_level_internal_lpm"], 0.3);

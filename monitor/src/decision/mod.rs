@@ -116,9 +116,9 @@ const LEVEL_RELEASE_S: f64 = 0.5;
 /// extend and retract gains') beyond which the `both` filter's valve no
 /// longer describes the installation. Valves differ by ±5–10 % and
 /// calibration fits the installation's; a filter that needs ±50 % makes
-/// up with the gain for a valve model that is
-/// wrong where the valve now works (a dead zone or edge it was not
-/// calibrated on), and its leak states take the rest of that error. On
+/// up with the gain for a valve model that is wrong where the valve now
+/// works (a dead zone or edge it was not calibrated on), and its leak
+/// states take the rest of that error. On
 /// development rig 1 (100 bar, 40 °C, valve kept by a partial
 /// calibration) the retract gain stood at +78 … +136 % when both
 /// healthy runs raised internal-leak alarms in slow retractions. Such

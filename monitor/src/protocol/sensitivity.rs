@@ -1,8 +1,8 @@
 //! Sensitivity frame `LM_Sensitivity` (0x307, every second): the level a
 //! leak estimate must exceed to alarm right now, i.e. what a `healthy`
-//! verdict is measured against — per leak the alarm level in use (the user's, raised to the
-//! installation's floor in the current operating region,
-//! [`Status::alarm_level_lpm`]) — and the current evidence weight.
+//! verdict is measured against — per leak the alarm level in use (the
+//! user's, raised to the installation's floor in the current operating
+//! region, [`Status::alarm_level_lpm`]) — and the current evidence weight.
 //!
 //! | byte | bits | signal | unit |
 //! |---|---|---|---|
