@@ -311,9 +311,9 @@ pub fn replay<T: Real, R: BufRead>(
             summary.leak_external_lpm = Some(round4(e as f64));
             summary.leak_internal_sd_lpm = status.leak_internal_sd_lpm.map(|v| round4(v as f64));
             summary.leak_external_sd_lpm = status.leak_external_sd_lpm.map(|v| round4(v as f64));
-            let [li, le] = status.alarm_level_lpm;
-            summary.alarm_level_internal_lpm = Some(round4(li as f64));
-            summary.alarm_level_external_lpm = Some(round4(le as f64));
+            let [li, le] = status.published_alarm_levels();
+            summary.alarm_level_internal_lpm = li.map(|v| round4(v as f64));
+            summary.alarm_level_external_lpm = le.map(|v| round4(v as f64));
         }
         for e in &status.events {
             if matches!(e, Event::AlarmRaised(_)) && summary.first_alarm_s.is_none() {

@@ -242,6 +242,17 @@ impl Status {
         crate::decision::valve_gains_misfit(self.valve_gain_deviation)
     }
 
+    /// The alarm levels in use (internal, external), each with the leak
+    /// estimate it applies to: `None` where the monitor has none (warming
+    /// up, a sensor fault), as the CAN frame and the replay publish them.
+    pub fn published_alarm_levels(&self) -> [Option<f32>; 2] {
+        let [internal, external] = self.alarm_level_lpm;
+        [
+            self.leak_internal_lpm.map(|_| internal),
+            self.leak_external_lpm.map(|_| external),
+        ]
+    }
+
     /// The plant was quasi-steady enough at this sample for it to count as
     /// evidence ([`PAUSED_WEIGHT`]); whether the valve model fitted there
     /// is [`valve_model_misfit`](Self::valve_model_misfit)'s question.

@@ -54,11 +54,10 @@ fn level_ml_min(lpm: Option<f32>) -> Option<u16> {
 impl SensitivityFrame {
     /// The frame for a monitor status.
     pub fn from_status(s: &Status) -> Self {
-        // A level is published with the leak estimate it applies to.
-        let [internal, external] = s.alarm_level_lpm;
+        let [internal, external] = s.published_alarm_levels();
         Self {
-            alarm_level_internal_ml_min: level_ml_min(s.leak_internal_lpm.map(|_| internal)),
-            alarm_level_external_ml_min: level_ml_min(s.leak_external_lpm.map(|_| external)),
+            alarm_level_internal_ml_min: level_ml_min(internal),
+            alarm_level_external_ml_min: level_ml_min(external),
             evidence_weight_pct: to_i32(Some(s.evidence_weight), 1e-2, 0, WEIGHT_MAX_PCT as i32)
                 .map(|v| v as u8),
         }
