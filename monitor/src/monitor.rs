@@ -3,7 +3,7 @@
 //! bit, on any IEEE-754 machine (see `real.rs`).
 
 use crate::decision::latch::AckOutcome;
-use crate::decision::Decision;
+use crate::decision::{Decision, SampleFacts};
 use crate::elapsed::{elapsed, exceeds, Window};
 use crate::estimation::bank::{
     external_index, internal_index, Bank, BankOutput, HypothesisFilter, Measurement, ProcessNoise,
@@ -333,15 +333,14 @@ impl<T: Real> Monitor<T> {
             flags |= health::WARMING_UP;
         }
         let region = operating_region(c.u_valve, self.cfg.hold_band);
-        flags |= self.decision.update(
-            &ok,
-            T::c(dt),
-            self.quiet.weight(),
-            !warming && !suspect && flags & health::FILTER_RESET == 0,
+        let facts = SampleFacts {
+            dt: T::c(dt),
+            weight: self.quiet.weight(),
+            valid: !warming && !suspect && flags & health::FILTER_RESET == 0,
             region,
-            sample.t_s,
-            &mut events,
-        );
+            t_s: sample.t_s,
+        };
+        flags |= self.decision.update(&ok, facts, &mut events);
         self.status(sample.t_s, checked.faulted, flags, events)
     }
 

@@ -133,6 +133,24 @@ const EVIDENCE_CAP_S: f64 = 1.0e4;
 /// for much.
 pub const PAUSED_WEIGHT: f64 = 0.5;
 
+/// What the decision is told of one sample besides the filters' outputs.
+#[derive(Clone, Copy, Debug)]
+pub struct SampleFacts<T> {
+    /// Time since the previous sample, s.
+    pub dt: T,
+    /// How quasi-steady the plant is, 0–1 (the learning weight): the share
+    /// of `dt` that counts as evidence.
+    pub weight: T,
+    /// The sample counts as evidence at all (warm-up over, sensors
+    /// trusted, no filter reset).
+    pub valid: bool,
+    /// Operating region for the baseline and the alarm level: 0
+    /// retracting, 1 holding, 2 extending.
+    pub region: usize,
+    /// Sample time, s.
+    pub t_s: f64,
+}
+
 /// Decision state.
 #[derive(Clone, Debug)]
 pub struct Decision<T> {
@@ -321,24 +339,23 @@ impl<T: Real> Decision<T> {
     }
 
     /// Take one sample's filter outputs (`None`: that filter was reset)
-    /// at sample time `t_s` (s).
-    /// `valid`: the sample counts as evidence. `region`: the operating
-    /// region (0 retracting, 1 holding, 2 extending) for the baseline.
+    /// with what else is known of that sample (`facts`).
     /// Returns `health::EVIDENCE_PAUSED` when it did not count (or counted
     /// for little), else 0; the decision's own flags are
     /// [`flags`](Self::flags).
-    // One sample's worth of inputs, each a different kind of fact.
-    #[allow(clippy::too_many_arguments)]
     pub fn update(
         &mut self,
         out: &[Option<FilterOutput<T>>; 4],
-        dt: T,
-        weight: T,
-        valid: bool,
-        region: usize,
-        t_s: f64,
+        facts: SampleFacts<T>,
         events: &mut Events,
     ) -> u16 {
+        let SampleFacts {
+            dt,
+            weight,
+            valid,
+            region,
+            t_s,
+        } = facts;
         if out.iter().any(Option::is_none) {
             self.reset_hold_s = self.reset_hold_after_s;
         } else {
@@ -612,6 +629,18 @@ mod tests {
     use super::*;
     use crate::estimation::bank::FilterOutput;
 
+    /// One sample's facts: `dt` s, evidence `weight`, `valid`, operating
+    /// `region`, at `t_s` s.
+    fn facts(dt: f64, weight: f64, valid: bool, region: usize, t_s: f64) -> SampleFacts<f64> {
+        SampleFacts {
+            dt,
+            weight,
+            valid,
+            region,
+            t_s,
+        }
+    }
+
     /// A filter output whose `both` filter reads `internal_lpm` of
     /// internal leak, certain (σ 0), with every hypothesis fitting alike
     /// except that the leak ones fit better.
@@ -650,7 +679,7 @@ mod tests {
         for i in 0..10_000 {
             let t = i as f64 * dt;
             let (region, lpm) = reading(t);
-            d.update(&outputs(lpm), dt, 1.0, true, region, t, &mut events);
+            d.update(&outputs(lpm), facts(dt, 1.0, true, region, t), &mut events);
             if d.latched().contains(Leak::Internal) {
                 return Some(t);
             }
@@ -716,7 +745,11 @@ mod tests {
         let mut run = |d: &mut Decision<f64>, region: usize, secs: f64| {
             for _ in 0..(secs * 1000.0).round() as usize {
                 t += 0.001;
-                d.update(&outputs(0.0), 0.001, 1.0, true, region, t, &mut events);
+                d.update(
+                    &outputs(0.0),
+                    facts(0.001, 1.0, true, region, t),
+                    &mut events,
+                );
             }
             let l = d.alarm_levels();
             (f64::from(l.internal()), f64::from(l.external()))
@@ -749,7 +782,11 @@ mod tests {
         for (i, region) in [1, 2, 0, 1].into_iter().enumerate() {
             for k in 0..1000 {
                 let t = (i * 1000 + k) as f64 * 0.001;
-                d.update(&outputs(0.0), 0.001, 1.0, i > 0, region, t, &mut events);
+                d.update(
+                    &outputs(0.0),
+                    facts(0.001, 1.0, i > 0, region, t),
+                    &mut events,
+                );
             }
             assert_eq!(d.alarm_levels(), PerLeak::splat(gross), "region {region}");
         }
@@ -768,7 +805,7 @@ mod tests {
             }
             for i in 0..10_000 {
                 let t = i as f64 * 0.001;
-                d.update(&out, 0.001, 1.0, true, 2, t, &mut events);
+                d.update(&out, facts(0.001, 1.0, true, 2, t), &mut events);
             }
             (!d.latched().is_empty(), d.conclusive())
         };
@@ -801,7 +838,7 @@ mod tests {
             for i in 0..20_000 {
                 let t = i as f64 * 0.001;
                 let ext = if t < 5.0 { 0.0 } else { external_lpm };
-                d.update(&both(1.0, ext), 0.001, 1.0, true, 1, t, &mut events);
+                d.update(&both(1.0, ext), facts(0.001, 1.0, true, 1, t), &mut events);
                 if t < 5.0 && t > 4.9 {
                     assert_eq!(d.latched(), LeakSet::INTERNAL, "internal first");
                 }
@@ -837,7 +874,11 @@ mod tests {
             let mut d: Decision<f64> = Decision::new(&Params::nominal());
             let mut events = Events::new();
             for i in 0..10_000 {
-                d.update(&out, 0.001, 1.0, true, 1, i as f64 * 0.001, &mut events);
+                d.update(
+                    &out,
+                    facts(0.001, 1.0, true, 1, i as f64 * 0.001),
+                    &mut events,
+                );
             }
             d.latched()
         };
@@ -855,7 +896,7 @@ mod tests {
         let mut run = |d: &mut Decision<f64>, out: &[Option<FilterOutput<f64>>; 4], secs: f64| {
             for _ in 0..(secs * 1000.0) as usize {
                 t += 0.001;
-                d.update(out, 0.001, 1.0, true, 1, t, &mut events);
+                d.update(out, facts(0.001, 1.0, true, 1, t), &mut events);
             }
         };
         run(&mut d, &outputs(0.0), 5.0);
@@ -883,7 +924,7 @@ mod tests {
             let mut events = Events::new();
             for i in 0..10_000 {
                 let t = i as f64 * 0.001;
-                d.update(&outputs(0.0), 0.001, 1.0, true, 1, t, &mut events);
+                d.update(&outputs(0.0), facts(0.001, 1.0, true, 1, t), &mut events);
             }
             d
         };
