@@ -13,6 +13,10 @@
 //! difference; unclipped, w-weighted) before and after the onset and the
 //! response (after − before) / true flow: 1 when the estimate follows the
 //! leak, 0 when something else absorbs it.
+//! A third line splits that response by operating region (retracting,
+//! holding, extending, from the valve command as the monitor sees it) with
+//! each region's share of the post-onset evidence: where the leak is seen,
+//! and where it is taken for something else.
 //!
 //! `cargo run --release -p host-sim --example detdiag -- RUNS.json CACHE [ID-SUBSTRING...]`
 //! (no substring: every leak run). `DETDIAG_TRACE=PREFIX` writes a
@@ -76,6 +80,9 @@ fn main() -> anyhow::Result<()> {
         let (mut pre, mut prew, mut post, mut postw, mut tq, mut tqn) =
             (0.0f64, 0.0f64, 0.0f64, 0.0f64, 0.0f64, 0.0f64);
         let mut pre_max = 0.0f64;
+        // The same per operating region (retracting, holding, extending):
+        // [pre, pre weight, post, post weight, truth, truth weight].
+        let mut by_region = [[0.0f64; 6]; 3];
         let mut fast = 0.0f64;
         let mut verdict = String::new();
         let mut tw = trace
@@ -148,11 +155,18 @@ fn main() -> anyhow::Result<()> {
                 let w = st.evidence_weight as f64;
                 let a = (0.001 * w / 0.25).min(1.0);
                 fast += a * (flow - fast);
+                let r = &mut by_region[region];
                 if s.t_s >= 5.0 && s.t_s < onset {
+                    r[0] += w * flow;
+                    r[1] += w;
                     pre += w * flow;
                     prew += w;
                     pre_max = pre_max.max(fast.abs());
                 } else if s.t_s >= onset + 2.0 {
+                    r[2] += w * flow;
+                    r[3] += w;
+                    r[4] += w * truth[k].abs();
+                    r[5] += w;
                     post += w * flow;
                     postw += w;
                     tq += w * truth[k].abs();
@@ -201,6 +215,17 @@ fn main() -> anyhow::Result<()> {
             "    flow(w-wtd, unclipped): pre {:+.3} (|fast| max {:.3})  post {:+.3}  truth(w) {:.3}  response (post-pre)/truth {:.2}",
             pre / prew.max(1e-9), pre_max, post / postw.max(1e-9), tq / tqn.max(1e-9),
             (post / postw.max(1e-9) - pre / prew.max(1e-9)) / (tq / tqn.max(1e-9))
+        );
+        let response = |r: &[f64; 6]| {
+            let m = |a: f64, b: f64| a / b.max(1e-9);
+            (m(r[2], r[3]) - m(r[0], r[1])) / m(r[4], r[5])
+        };
+        let share = |r: &[f64; 6]| r[3] / postw.max(1e-9);
+        println!(
+            "    response by region (share of post-onset evidence): retracting {:.2} ({:.0} %)  holding {:.2} ({:.0} %)  extending {:.2} ({:.0} %)",
+            response(&by_region[0]), 100.0 * share(&by_region[0]),
+            response(&by_region[1]), 100.0 * share(&by_region[1]),
+            response(&by_region[2]), 100.0 * share(&by_region[2]),
         );
     }
     Ok(())
