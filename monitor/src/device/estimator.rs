@@ -23,6 +23,7 @@ use crate::decision::latch::AckOutcome;
 use crate::device::alarm::AlarmOutput;
 use crate::device::deadline::{DeadlineMonitor, LoadReport, SampleClock};
 use crate::device::diagnostics::DeviceFaults;
+use crate::device::level_peak::LevelPeak;
 use crate::monitor::Monitor;
 use crate::params::{ParamError, Params};
 use crate::protocol::schedule::{Due, FrameScheduler};
@@ -73,6 +74,9 @@ pub struct Outputs {
     pub alarm_frame: AlarmFrame,
     /// The frames due at this sample.
     pub due: Due,
+    /// The alarm levels the sensitivity frame reports when it is due
+    /// (the period's highest; internal, external, l/min).
+    pub sensitivity_levels: [Option<f32>; 2],
 }
 
 impl Outputs {
@@ -91,9 +95,10 @@ impl Outputs {
         DetailFrame::from_status(&self.status)
     }
 
-    /// The sensitivity frame for this sample.
+    /// The sensitivity frame for this sample (when it is due: the alarm
+    /// levels are the highest since the previous one).
     pub fn sensitivity_frame(&self) -> SensitivityFrame {
-        SensitivityFrame::from_status(&self.status)
+        SensitivityFrame::with_levels(self.sensitivity_levels, &self.status)
     }
 }
 
@@ -126,6 +131,7 @@ pub struct Estimator<T: Real = f32> {
     clock: SampleClock,
     deadline: DeadlineMonitor,
     schedule: FrameScheduler,
+    level_peak: LevelPeak,
     alarm: AlarmOutput,
     changed_at_ms: u32,
     stalled: bool,
@@ -148,6 +154,7 @@ impl<T: Real> Estimator<T> {
             clock: SampleClock::new(sample_period_us),
             deadline: DeadlineMonitor::new(cycles_per_sample),
             schedule: FrameScheduler::new(),
+            level_peak: LevelPeak::default(),
             alarm: AlarmOutput::BOOT,
             changed_at_ms: 0,
             stalled: false,
@@ -192,6 +199,12 @@ impl<T: Real> Estimator<T> {
             self.changed_at_ms = t_ms as u32;
         }
         let due = self.schedule.due(t_ms, alarm_changed);
+        self.level_peak.observe(&status);
+        let sensitivity_levels = if due.sensitivity {
+            self.level_peak.take(&status)
+        } else {
+            status.published_alarm_levels()
+        };
         Outputs {
             t_ms,
             index,
@@ -204,6 +217,7 @@ impl<T: Real> Estimator<T> {
             first,
             alarm_frame: AlarmFrame::new(&alarm, self.changed_at_ms),
             due,
+            sensitivity_levels,
         }
     }
 

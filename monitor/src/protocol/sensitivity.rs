@@ -14,8 +14,11 @@
 //! | 6 | | EvidenceWeight | u8, %, 0..=100, 255 = not available |
 //! | 7 | | reserved | 0 |
 //!
-//! The levels are not available while the monitor has no leak estimate
-//! (warming up, a sensor fault), as `LM_Status`' leak sizes.
+//! Each level is the highest in use over the frame's period (since the
+//! previous frame; the level follows the operating region from sample to
+//! sample), so that every sample of that second was measured against at
+//! least it. The levels are not available while the monitor has no leak
+//! estimate (warming up, a sensor fault), as `LM_Status`' leak sizes.
 
 use super::bytes::{get_u16, put_u16};
 use super::quantize::to_i32;
@@ -52,9 +55,16 @@ fn level_ml_min(lpm: Option<f32>) -> Option<u16> {
 }
 
 impl SensitivityFrame {
-    /// The frame for a monitor status.
+    /// The frame for a monitor status: its alarm levels at that sample.
     pub fn from_status(s: &Status) -> Self {
-        let [internal, external] = s.published_alarm_levels();
+        Self::with_levels(s.published_alarm_levels(), s)
+    }
+
+    /// The frame for a monitor status with the alarm levels `levels`
+    /// (internal, external; l/min) — on the device the period's highest
+    /// ([`LevelPeak`](crate::device::level_peak::LevelPeak)).
+    pub fn with_levels(levels: [Option<f32>; 2], s: &Status) -> Self {
+        let [internal, external] = levels;
         Self {
             alarm_level_internal_ml_min: level_ml_min(internal),
             alarm_level_external_ml_min: level_ml_min(external),
