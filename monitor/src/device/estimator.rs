@@ -226,9 +226,11 @@ impl<T: Real> Estimator<T> {
     /// `Monitor::new` — on the device by a low-priority task, so that
     /// neither its construction time nor its stack fall on the estimator.
     /// `monitor` gets the old one. The sample clock, the deadline figures
-    /// and the frame schedule run on.
+    /// and the frame schedule run on; the alarm levels' peak starts afresh.
     pub fn swap_monitor(&mut self, monitor: &mut Monitor<T>) {
         core::mem::swap(&mut self.monitor, monitor);
+        // The old set's alarm levels say nothing about the new one's.
+        self.level_peak = LevelPeak::default();
     }
 
     /// The block just processed took `busy_cycles`; returns true if that
