@@ -199,11 +199,12 @@ impl<T: Real> Estimator<T> {
             self.changed_at_ms = t_ms as u32;
         }
         let due = self.schedule.due(t_ms, alarm_changed);
-        self.level_peak.observe(&status);
+        let levels = status.published_alarm_levels();
+        self.level_peak.observe(levels);
         let sensitivity_levels = if due.sensitivity {
-            self.level_peak.take(&status)
+            self.level_peak.take(levels)
         } else {
-            status.published_alarm_levels()
+            levels
         };
         Outputs {
             t_ms,
