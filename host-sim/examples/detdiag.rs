@@ -76,13 +76,11 @@ fn main() -> anyhow::Result<()> {
             params.baseline.internal_lpm_per_10bar,
             params.baseline.external_lpm_per_10bar,
         ];
-        // w-weighted unclipped flow of the leak kind, before [5, onset) and after [onset+2, end)
-        let (mut pre, mut prew, mut post, mut postw, mut tq, mut tqn) =
-            (0.0f64, 0.0f64, 0.0f64, 0.0f64, 0.0f64, 0.0f64);
-        let mut pre_max = 0.0f64;
-        // The same per operating region (retracting, holding, extending):
-        // [pre, pre weight, post, post weight, truth, truth weight].
+        // w-weighted unclipped flow of the leak kind, before [5, onset) and
+        // after [onset+2, end), per operating region (retracting, holding,
+        // extending): [pre, pre weight, post, post weight, truth, truth weight].
         let mut by_region = [[0.0f64; 6]; 3];
+        let mut pre_max = 0.0f64;
         let mut fast = 0.0f64;
         let mut verdict = String::new();
         let mut tw = trace
@@ -159,18 +157,12 @@ fn main() -> anyhow::Result<()> {
                 if s.t_s >= 5.0 && s.t_s < onset {
                     r[0] += w * flow;
                     r[1] += w;
-                    pre += w * flow;
-                    prew += w;
                     pre_max = pre_max.max(fast.abs());
                 } else if s.t_s >= onset + 2.0 {
                     r[2] += w * flow;
                     r[3] += w;
                     r[4] += w * truth[k].abs();
                     r[5] += w;
-                    post += w * flow;
-                    postw += w;
-                    tq += w * truth[k].abs();
-                    tqn += w;
                 }
             }
             if s.t_s < onset + 2.0 {
@@ -211,16 +203,14 @@ fn main() -> anyhow::Result<()> {
             &verdict[..verdict.len().min(5)],
             t_alarm.map_or("-".to_string(), |t| format!("{t:.1}")),
         );
+        let all: [f64; 6] = std::array::from_fn(|j| by_region.iter().map(|r| r[j]).sum());
+        let m = |a: f64, b: f64| a / b.max(1e-9);
+        let response = |r: &[f64; 6]| (m(r[2], r[3]) - m(r[0], r[1])) / m(r[4], r[5]);
         println!(
             "    flow(w-wtd, unclipped): pre {:+.3} (|fast| max {:.3})  post {:+.3}  truth(w) {:.3}  response (post-pre)/truth {:.2}",
-            pre / prew.max(1e-9), pre_max, post / postw.max(1e-9), tq / tqn.max(1e-9),
-            (post / postw.max(1e-9) - pre / prew.max(1e-9)) / (tq / tqn.max(1e-9))
+            m(all[0], all[1]), pre_max, m(all[2], all[3]), m(all[4], all[5]), response(&all)
         );
-        let response = |r: &[f64; 6]| {
-            let m = |a: f64, b: f64| a / b.max(1e-9);
-            (m(r[2], r[3]) - m(r[0], r[1])) / m(r[4], r[5])
-        };
-        let share = |r: &[f64; 6]| r[3] / postw.max(1e-9);
+        let share = |r: &[f64; 6]| m(r[3], all[3]);
         println!(
             "    response by region (share of post-onset evidence): retracting {:.2} ({:.0} %)  holding {:.2} ({:.0} %)  extending {:.2} ({:.0} %)",
             response(&by_region[0]), 100.0 * share(&by_region[0]),
