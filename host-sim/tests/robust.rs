@@ -300,7 +300,7 @@ fn calibration_bounds_the_laminar_leakage_where_the_installation_allows_it() {
     let text = cal.to_toml("rig 6").unwrap();
     let back: Params = toml::from_str(&text).unwrap();
     assert_eq!(back.filter.laminar_factor_min, UNBOUNDED_LAMINAR_FACTOR);
-    assert_eq!(back.filter.q_laminar, start.filter.q_laminar);
+    assert_eq!(back.filter.q_leak, start.filter.q_leak);
     // Development rig 4 (100 bar, 25 °C) keeps the bound.
     let cal = calibrated(4, 100.0, 25.0);
     assert_eq!(
@@ -322,6 +322,43 @@ fn calibration_bounds_the_laminar_leakage_where_the_installation_allows_it() {
     assert_warns(&cal, |w| {
         w.starts_with("covered valve edges kept symmetric")
     });
+}
+
+#[test]
+fn calibration_holds_the_laminar_factor_where_the_oil_temperature_is_read() {
+    use host_sim::calibrate::{HELD_EDGE_LEAK_SCALE, HELD_LAMINAR_PRIOR, HELD_Q_LAMINAR};
+    let start = Params::nominal();
+    // Development rig 2 records the oil temperature (even seeds do).
+    let cal = calibrated(2, 50.0, 25.0);
+    let f = &cal.params.filter;
+    assert_eq!(
+        (f.q_laminar, f.laminar_prior),
+        (HELD_Q_LAMINAR, HELD_LAMINAR_PRIOR)
+    );
+    assert_eq!(
+        cal.params.valve.edge_leak_lpm_per_bar,
+        HELD_EDGE_LEAK_SCALE * start.valve.edge_leak_lpm_per_bar
+    );
+    assert!(cal
+        .fits
+        .iter()
+        .any(|f| f.what == "healthy laminar leakage factor" && f.value.starts_with("held")));
+    // The installation file carries the held factor (the rest of the
+    // filter tuning is the monitor version's).
+    let back: Params = toml::from_str(&cal.to_toml("rig 2").unwrap()).unwrap();
+    assert_eq!(
+        (back.filter.q_laminar, back.filter.laminar_prior),
+        (HELD_Q_LAMINAR, HELD_LAMINAR_PRIOR)
+    );
+    assert_eq!(back.filter.q_leak, start.filter.q_leak);
+    // Rig 1 does not: the factor stays free to follow the viscosity.
+    let cal = calibrated(1, 50.0, 25.0);
+    let f = &cal.params.filter;
+    assert_eq!(
+        (f.q_laminar, f.laminar_prior),
+        (start.filter.q_laminar, start.filter.laminar_prior)
+    );
+    assert!(!cal.to_toml("rig 1").unwrap().contains("q_laminar"));
 }
 
 #[test]

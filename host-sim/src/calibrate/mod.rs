@@ -132,6 +132,17 @@ pub const FLOOR_MARGIN: f64 = 1.5;
 /// `filter.laminar_factor_min` of calibration's fallback: the laminar
 /// term a free nuisance, as before the bound (never reached in practice).
 pub const UNBOUNDED_LAMINAR_FACTOR: f64 = -5.0;
+
+/// Random walk of the laminar-leakage factor, (relative)²/s, where the
+/// oil temperature is measured: none.
+pub const HELD_Q_LAMINAR: f64 = 0.0;
+/// Prior 1σ of the laminar-leakage factor (relative) where the oil
+/// temperature is measured.
+pub const HELD_LAMINAR_PRIOR: f64 = 0.05;
+/// Land leakage per covered edge with the laminar factor held, × the
+/// nominal (the thesis' value for a centred spool).
+pub const HELD_EDGE_LEAK_SCALE: f64 = 3.0;
+
 /// A floor above this is no leak monitor: refuse, the model does not
 /// describe the installation. Below it the monitor still tells the gross
 /// leaks, and without alarming falsely, which a refusal (the nominal

@@ -163,7 +163,9 @@ impl Calibration {
     /// The installation's parameters as TOML, with the report as a comment
     /// header. The `[filter]` section is left out on purpose: filter tuning
     /// belongs to the monitor version, not to the installation, so a newer
-    /// monitor's defaults apply to an existing installation file.
+    /// monitor's defaults apply to an existing installation file. Only the
+    /// laminar factor's settings that calibration chose for this
+    /// installation are written.
     pub fn to_toml(&self, source: &str) -> Result<String, toml::ser::Error> {
         let mut out =
             format!("# Installation parameters fitted by host-sim calibrate from {source}\n");
@@ -173,13 +175,26 @@ impl Calibration {
         out += "\n";
         let mut table = toml::Table::try_from(&self.params)?;
         // The filter tuning belongs to the monitor version, not to the
-        // installation; the one exception is a laminar bound calibration
-        // had to relax for this installation.
+        // installation; the exceptions are the laminar factor's bound
+        // and freedom, which calibration sets for this installation (a
+        // relaxed bound; held where the oil temperature is read).
         table.remove("filter");
-        let laminar_min = self.params.filter.laminar_factor_min;
-        if laminar_min != Params::nominal().filter.laminar_factor_min {
-            let mut filter = toml::Table::new();
-            filter.insert("laminar_factor_min".into(), laminar_min.into());
+        let (f, nominal) = (&self.params.filter, Params::nominal().filter);
+        let mut filter = toml::Table::new();
+        for (key, value, default) in [
+            (
+                "laminar_factor_min",
+                f.laminar_factor_min,
+                nominal.laminar_factor_min,
+            ),
+            ("q_laminar", f.q_laminar, nominal.q_laminar),
+            ("laminar_prior", f.laminar_prior, nominal.laminar_prior),
+        ] {
+            if value != default {
+                filter.insert(key.into(), value.into());
+            }
+        }
+        if !filter.is_empty() {
             table.insert("filter".into(), filter.into());
         }
         out += &toml::to_string(&table)?;
