@@ -127,10 +127,8 @@ pub(super) fn fit_plant(
     let mut p = start.clone();
     p.baseline = Default::default();
     let mut fits = Vec::new();
-    if has_temperature(samples) {
-        hold_laminar_factor(&mut p, &mut fits);
-    }
     let mut warnings = Vec::new();
+    laminar_factor_mode(&mut p, has_temperature(samples), &mut fits, &mut warnings);
     let mut quality = Quality::default();
     let mut baseline_notes = Vec::new();
     // The regressions' samples, for the valve, the load and the holds.
@@ -292,19 +290,45 @@ fn has_temperature(samples: &[&[Sample]]) -> bool {
 /// centred spool's) is below what covered edges pass at a hold, where the
 /// spool sits off-centre and one edge of each pair opens up
 /// (`HELD_EDGE_LEAK_SCALE`, measured on the development rigs).
-fn hold_laminar_factor(p: &mut Params, fits: &mut Vec<Fit>) {
-    p.filter.q_laminar = HELD_Q_LAMINAR;
-    p.filter.laminar_prior = HELD_LAMINAR_PRIOR;
-    p.valve.edge_leak_lpm_per_bar *= HELD_EDGE_LEAK_SCALE;
-    fits.push(Fit {
-        what: "healthy laminar leakage factor".into(),
-        value: format!(
-            "held (prior {:.0} %, no random walk); land leakage {:.4} l/min/bar per covered edge",
-            100.0 * HELD_LAMINAR_PRIOR,
-            p.valve.edge_leak_lpm_per_bar
-        ),
-        quality: "the recording reads the oil temperature: the viscosity follows it".into(),
-    });
+///
+/// Start parameters that already hold it (an installation file calibrated
+/// before) keep their land leakage; without a temperature reading they
+/// are set free again, with a warning.
+fn laminar_factor_mode(
+    p: &mut Params,
+    temperature: bool,
+    fits: &mut Vec<Fit>,
+    warnings: &mut Vec<String>,
+) {
+    let held = p.filter.q_laminar == HELD_Q_LAMINAR && p.filter.laminar_prior == HELD_LAMINAR_PRIOR;
+    match (temperature, held) {
+        (true, false) => {
+            p.filter.q_laminar = HELD_Q_LAMINAR;
+            p.filter.laminar_prior = HELD_LAMINAR_PRIOR;
+            p.valve.edge_leak_lpm_per_bar *= HELD_EDGE_LEAK_SCALE;
+        }
+        (false, true) => {
+            let free = Params::nominal().filter;
+            p.filter.q_laminar = free.q_laminar;
+            p.filter.laminar_prior = free.laminar_prior;
+            p.valve.edge_leak_lpm_per_bar /= HELD_EDGE_LEAK_SCALE;
+            warnings.push(
+                "healthy laminar leakage factor set free again: the start parameters held it, and this recording does not read the oil temperature".into(),
+            );
+        }
+        _ => {}
+    }
+    if temperature {
+        fits.push(Fit {
+            what: "healthy laminar leakage factor".into(),
+            value: format!(
+                "held (prior {:.0} %, no random walk); land leakage {:.4} l/min/bar per covered edge",
+                100.0 * HELD_LAMINAR_PRIOR,
+                p.valve.edge_leak_lpm_per_bar
+            ),
+            quality: "the recording reads the oil temperature: the viscosity follows it".into(),
+        });
+    }
 }
 
 /// The regressions' quality against the refusal thresholds.
@@ -438,4 +462,47 @@ fn leakage_and_baseline(samples: &[&[Sample]], mut p: Params) -> Result<LeakFit,
         problems,
         edge: None,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `p` after the laminar mode step for a recording with or without
+    /// the oil temperature, and the warnings it gave.
+    fn moded(mut p: Params, temperature: bool) -> (Params, Vec<String>) {
+        let mut warnings = Vec::new();
+        laminar_factor_mode(&mut p, temperature, &mut Vec::new(), &mut warnings);
+        (p, warnings)
+    }
+
+    #[test]
+    fn the_laminar_factor_is_held_once_and_set_free_without_a_temperature() {
+        let nominal = Params::nominal();
+        let (held, w) = moded(nominal.clone(), true);
+        assert_eq!(held.filter.q_laminar, HELD_Q_LAMINAR);
+        assert_eq!(held.filter.laminar_prior, HELD_LAMINAR_PRIOR);
+        let edge = nominal.valve.edge_leak_lpm_per_bar;
+        assert_eq!(
+            held.valve.edge_leak_lpm_per_bar,
+            HELD_EDGE_LEAK_SCALE * edge
+        );
+        assert!(w.is_empty());
+        // Calibrating again from the held file does not scale twice.
+        let (again, _) = moded(held.clone(), true);
+        assert_eq!(
+            again.valve.edge_leak_lpm_per_bar,
+            held.valve.edge_leak_lpm_per_bar
+        );
+        // A recording without the temperature frees it, and says so.
+        let (freed, w) = moded(held, false);
+        assert_eq!(freed.filter.q_laminar, nominal.filter.q_laminar);
+        assert_eq!(freed.filter.laminar_prior, nominal.filter.laminar_prior);
+        assert!((freed.valve.edge_leak_lpm_per_bar - edge).abs() < 1e-15);
+        assert!(w[0].starts_with("healthy laminar leakage factor set free"));
+        // Free parameters stay free without it.
+        let (free, w) = moded(nominal.clone(), false);
+        assert_eq!(free.filter.q_laminar, nominal.filter.q_laminar);
+        assert!(w.is_empty());
+    }
 }
