@@ -140,7 +140,8 @@ pub const HELD_Q_LAMINAR: f64 = 0.0;
 /// temperature is measured.
 pub const HELD_LAMINAR_PRIOR: f64 = 0.05;
 /// Land leakage per covered edge with the laminar factor held, × the
-/// nominal (the thesis' value for a centred spool).
+/// nominal (the thesis' value for a centred spool): chosen among × 1–3 on
+/// the development and further rigs; calibration cannot measure it yet.
 pub const HELD_EDGE_LEAK_SCALE: f64 = 3.0;
 
 /// A floor above this is no leak monitor: refuse, the model does not

@@ -289,7 +289,8 @@ fn has_temperature(samples: &[&[Sample]]) -> bool {
 /// flow. Held, the land leakage's absolute size counts, and the nominal (a
 /// centred spool's) is below what covered edges pass at a hold, where the
 /// spool sits off-centre and one edge of each pair opens up
-/// (`HELD_EDGE_LEAK_SCALE`, measured on the development rigs).
+/// (`HELD_EDGE_LEAK_SCALE`: chosen on the development and further rigs,
+/// not measured per installation).
 ///
 /// Start parameters that already hold it (an installation file calibrated
 /// before) keep their land leakage; without a temperature reading they
