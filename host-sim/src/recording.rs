@@ -328,6 +328,11 @@ impl<R: BufRead> RecordingReader<R> {
             .map(|(_, v)| v.as_str())
     }
 
+    /// The recording has a column for `channel`.
+    pub fn has_channel(&self, channel: Channel) -> bool {
+        self.cols.channels[channel as usize].is_some()
+    }
+
     /// Columns beyond the format's (name, position), e.g. simulator truth.
     pub fn extra_columns(&self) -> &[(String, usize)] {
         &self.extra

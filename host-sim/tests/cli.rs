@@ -142,6 +142,38 @@ fn replay_json_has_the_contract_fields() {
     assert!((events[0]["t"].as_f64().unwrap() - 3.0).abs() < 1e-9);
 }
 
+/// A file that holds the laminar factor needs the oil temperature: on a
+/// recording without it, replay says so and every sample is a sensor fault.
+#[test]
+fn replay_without_the_temperature_a_held_laminar_factor_needs_is_a_sensor_fault() {
+    let dir = tempfile::tempdir().unwrap();
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples");
+    let held = format!(
+        "{}\n[filter]\nq_laminar = 0.0\n",
+        std::fs::read_to_string(root.join("reference-rig.toml")).unwrap()
+    );
+    let held = write(dir.path(), "held.toml", &held);
+    let rec = root.join("healthy.csv.gz");
+    let out = host_sim_ok(&[
+        "replay",
+        "--json",
+        "--params",
+        held.to_str().unwrap(),
+        rec.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("healthy.csv.gz") && err.contains("no temp_oil column"),
+        "{err}"
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["verdict"], "sensor_fault");
+    assert!(v["first_alarm_s"].is_null());
+    let events = v["events"].as_array().unwrap();
+    assert_eq!(events[0]["kind"], "sensor_fault");
+    assert_eq!(events[0]["sensor"], "temp_oil");
+}
+
 /// The alarm level in use at the end: the user's (0.08 l/min) on the
 /// reference rig, raised to the installation's floor in the region the
 /// recording ends in (extending), `null` without a leak estimate.

@@ -259,16 +259,24 @@ fn noise_is_estimated_and_leak_flows_are_never_negative() {
 /// nominal parameters as `host-sim eval` does it: from the cell's 60 s
 /// healthy recording in the full matrix's plan.
 fn calibrated(rig: u64, supply_bar: f64, temp_c: f64) -> Calibration {
-    let plan = plan(&PlanConfig::default());
-    let cell = plan
+    calibrated_from(&calibration_run(rig, supply_bar, temp_c))
+}
+
+/// The 60 s healthy recording development cell `rig` at `supply_bar`,
+/// `temp_c` is calibrated from in the full matrix's plan.
+fn calibration_run(rig: u64, supply_bar: f64, temp_c: f64) -> Run {
+    plan(&PlanConfig::default())
         .cells
         .iter()
         .find(|c| c.cell.rig == rig && c.cell.supply_bar == supply_bar && c.cell.temp_c == temp_c)
-        .expect("a development cell");
-    let samples: Vec<monitor::Sample> = plant::simulate(&cell.calibration.run())
-        .iter()
-        .map(row_sample)
-        .collect();
+        .expect("a development cell")
+        .calibration
+        .run()
+}
+
+/// `run` calibrated from the nominal parameters.
+fn calibrated_from(run: &Run) -> Calibration {
+    let samples: Vec<monitor::Sample> = plant::simulate(run).iter().map(row_sample).collect();
     calibrate(&samples, &Params::nominal()).unwrap_or_else(|e| panic!("{e}"))
 }
 
@@ -359,6 +367,37 @@ fn calibration_holds_the_laminar_factor_where_the_oil_temperature_is_read() {
         (start.filter.q_laminar, start.filter.laminar_prior)
     );
     assert!(!cal.to_toml("rig 1").unwrap().contains("q_laminar"));
+}
+
+#[test]
+fn with_the_laminar_factor_held_a_lost_oil_temperature_is_a_sensor_fault_never_a_leak() {
+    // Development rig 2 at 40 °C: the file holds the factor, so the
+    // viscosity rests on the temperature reading alone.
+    let mut run = calibration_run(2, 50.0, 40.0);
+    let cal = calibrated_from(&run);
+    assert!(cal.params.laminar_factor_held());
+    run.faults = vec![Fault::OpenWire {
+        channel: Channel::TempOil,
+        at_s: 30.0,
+    }];
+    let st = statuses_with(&run, &cal.params);
+    assert!(alarms(&st).is_empty(), "{:?}", alarms(&st));
+    let (before, after): (Vec<&Status>, Vec<&Status>) = st.iter().partition(|s| s.t_s < 30.0);
+    assert!(before.iter().all(|s| s.verdict != Verdict::SensorFault));
+    assert_eq!(before.last().unwrap().verdict, Verdict::Healthy);
+    let odd: Vec<_> = after
+        .iter()
+        .filter(|s| s.verdict != Verdict::SensorFault)
+        .map(|s| (s.t_s, s.verdict))
+        .take(5)
+        .collect();
+    assert!(odd.is_empty(), "{odd:?} of {}", after.len());
+    // The same file on a recording that does not read the temperature:
+    // a sensor fault throughout, never `healthy`.
+    run.faults.clear();
+    run.temp_column = false;
+    let st = statuses_with(&run, &cal.params);
+    assert!(st.iter().all(|s| s.verdict == Verdict::SensorFault));
 }
 
 #[test]

@@ -17,7 +17,7 @@ use crate::params::{operating_region, ParamError, Params};
 use crate::physics::fluid::laminar_flow_factor;
 use crate::physics::valve::SpoolStep;
 use crate::real::Real;
-use crate::sample::{Channel, Sample};
+use crate::sample::Sample;
 use crate::signal::{Conditioned, SampleChecker};
 use crate::status::{health, Event, Events, Status, Verdict};
 
@@ -380,10 +380,10 @@ impl<T: Real> Monitor<T> {
             flags |= health::SENSOR_FAULT;
         }
         flags |= self.decision.flags();
-        // The oil temperature is optional (the filters estimate viscosity
-        // themselves): its fault is reported in flags and events but does
-        // not take the verdict away. A required channel's fault does.
-        let required_fault = faulted & !Channel::TempOil.bit() != 0;
+        // An optional channel's fault (the oil temperature, where the
+        // filters estimate the viscosity themselves) is reported in flags
+        // and events but does not take the verdict away. A required one's does.
+        let required_fault = faulted & self.checker.required() != 0;
         // `healthy` is a claim that needs evidence (`Decision::conclusive`).
         let unsettled = health::WARMING_UP
             | health::TIME_NOT_INCREASING

@@ -4,8 +4,11 @@
 //! A reading that is missing (the acquisition marked it invalid), outside
 //! its plausible range, or frozen while the plant moves ([`frozen`]) faults
 //! its channel: the monitor then reports a sensor
-//! fault, never a leak and never "healthy". The oil temperature is optional:
-//! its fault is reported but does not stop the estimation.
+//! fault, never a leak and never "healthy". The oil temperature is optional
+//! (its fault is reported but does not stop the estimation) unless the
+//! installation holds the laminar-leakage factor
+//! ([`Params::laminar_factor_held`]): then the viscosity rests on it alone,
+//! and a missing or implausible temperature is a required channel's fault.
 
 use crate::params::Params;
 use crate::sample::{Channel, Sample};
@@ -13,6 +16,8 @@ use crate::status::{Event, Events};
 
 /// Valve commands beyond ±1 by more than this are implausible.
 const U_VALVE_LIMIT: f32 = 1.1;
+/// Every channel's bit.
+const ALL_CHANNELS: u8 = (1 << Channel::ALL.len()) - 1;
 /// Plausible oil temperatures, °C.
 const TEMP_RANGE_C: (f32, f32) = (-30.0, 150.0);
 
@@ -65,6 +70,8 @@ pub struct SampleChecker {
     /// Noise of the position, piston- and rod-chamber readings.
     noise: [noise::NoiseEstimate; 3],
     faulted: u8,
+    /// Channels whose fault stops the estimation (`Channel::bit`).
+    required: u8,
 }
 
 impl SampleChecker {
@@ -103,7 +110,18 @@ impl SampleChecker {
                 ]
             },
             faulted: 0,
+            required: if params.laminar_factor_held() {
+                ALL_CHANNELS
+            } else {
+                ALL_CHANNELS & !Channel::TempOil.bit()
+            },
         }
+    }
+
+    /// The channels whose fault stops the estimation (`Channel::bit`):
+    /// all but the oil temperature, unless the laminar factor is held.
+    pub fn required(&self) -> u8 {
+        self.required
     }
 
     /// The estimated white-noise σ of the position (m) and of the piston-
@@ -153,11 +171,10 @@ impl SampleChecker {
         });
         let frozen = self.frozen.update(s, dt_s, readings.as_ref());
         faulted |= frozen.frozen;
-        let required = faulted;
         let temp_oil_c = match s.temp_oil_c {
-            None => None,
             Some(t) if t.is_finite() && t >= TEMP_RANGE_C.0 && t <= TEMP_RANGE_C.1 => Some(t),
-            Some(_) => {
+            None if self.required & Channel::TempOil.bit() == 0 => None,
+            _ => {
                 faulted |= Channel::TempOil.bit();
                 None
             }
@@ -172,7 +189,7 @@ impl SampleChecker {
             }
         }
         self.faulted = faulted;
-        let values = (required == 0).then_some(Conditioned {
+        let values = (faulted & self.required == 0).then_some(Conditioned {
             p_supply_bar,
             p_piston_bar,
             p_rod_bar,
@@ -299,6 +316,27 @@ mod tests {
         assert!(r.values.is_some());
         assert_eq!(r.values.unwrap().temp_oil_c, None);
         assert_eq!(r.faulted, Channel::TempOil.bit());
+    }
+
+    #[test]
+    fn with_the_laminar_factor_held_the_temperature_is_required() {
+        let mut p = Params::nominal();
+        p.filter.q_laminar = 0.0;
+        let mut c = SampleChecker::new(&p);
+        let mut ev = Events::new();
+        let mut s = good();
+        s.temp_oil_c = Some(40.0);
+        assert_eq!(
+            c.check(&s, 1e-3, &mut ev).values.unwrap().temp_oil_c,
+            Some(40.0)
+        );
+        for bad in [None, Some(f32::NAN), Some(900.0)] {
+            s.temp_oil_c = bad;
+            let r = c.check(&s, 1e-3, &mut ev);
+            assert!(r.values.is_none(), "{bad:?}");
+            assert_eq!(r.faulted, Channel::TempOil.bit());
+        }
+        assert_eq!(ev.as_slice(), &[Event::SensorFault(Channel::TempOil)]);
     }
 
     #[test]

@@ -14,14 +14,16 @@ fn field(row: &mut Row, channel: Channel) -> &mut Option<f64> {
         Channel::PTank => &mut row.p_tank,
         Channel::XPiston => &mut row.x_piston,
         Channel::UValve => &mut row.u_valve,
+        Channel::TempOil => &mut row.temp_oil,
     }
 }
 
-/// Spike amplitude range of a channel, channel units (bar, m, command).
+/// Spike amplitude range of a channel, channel units (bar, m, command, °C).
 pub fn spike_range(channel: Channel) -> [f64; 2] {
     match channel {
         Channel::XPiston => [0.005, 0.03],
         Channel::UValve => [0.1, 0.5],
+        Channel::TempOil => [5.0, 30.0],
         _ => [5.0, 50.0],
     }
 }
@@ -141,13 +143,14 @@ mod tests {
         out
     }
 
-    const ALL: [Channel; 6] = [
+    const ALL: [Channel; 7] = [
         Channel::PSupply,
         Channel::PPiston,
         Channel::PRod,
         Channel::PTank,
         Channel::XPiston,
         Channel::UValve,
+        Channel::TempOil,
     ];
 
     #[test]
@@ -243,6 +246,7 @@ mod tests {
             let [lo, hi] = match ch {
                 Channel::XPiston => [0.0, 0.2],
                 Channel::UValve => [-1.0, 1.0],
+                Channel::TempOil => [0.0, 80.0],
                 _ => [-2.0, 250.0],
             };
             // Uniform over the range: σ = range/√12.

@@ -213,6 +213,8 @@ pub enum Channel {
     XPiston,
     /// Valve command.
     UValve,
+    /// Oil temperature (a fault shows only where the run records it).
+    TempOil,
 }
 
 /// A fault of the measurement chain, from `at_s` on.

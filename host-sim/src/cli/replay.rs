@@ -3,7 +3,7 @@
 use anyhow::{Context, Result};
 use host_sim::recording::RecordingReader;
 use host_sim::replay::{print_summary, replay, TraceWriter};
-use monitor::Params;
+use monitor::{Channel, Params};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -76,6 +76,15 @@ pub fn run(a: Args) -> Result<ExitCode> {
 fn replay_one(recording: &Path, params: &Params, a: &Args, separate: bool) -> Result<()> {
     let reader = RecordingReader::open(recording)?;
     let name = recording.display().to_string();
+    if params.laminar_factor_held() && !reader.has_channel(Channel::TempOil) {
+        eprintln!(
+            "warning: {name}: no temp_oil column, but the parameters hold the laminar leakage \
+             factor (filter.q_laminar = 0, calibrated where the oil temperature is read): the \
+             temperature is a required reading, so every sample is a sensor fault; calibrate \
+             from a recording of this installation without temp_oil for a file that does not \
+             need it"
+        );
+    }
     let start = std::time::Instant::now();
     let summary = match &a.trace {
         Some(path) => {

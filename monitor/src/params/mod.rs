@@ -568,6 +568,13 @@ impl Params {
         )
     }
 
+    /// The healthy laminar-leakage factor is held (no random walk,
+    /// `filter.q_laminar` 0): the viscosity then follows the oil
+    /// temperature alone, which becomes a required reading.
+    pub fn laminar_factor_held(&self) -> bool {
+        self.filter.q_laminar == 0.0
+    }
+
     /// The reference thesis rig (ch. 5–6).
     pub const NOMINAL: Params = Params {
         cylinder: Cylinder::NOMINAL,
