@@ -11,7 +11,7 @@ use crate::estimation::bank::{
 };
 use crate::estimation::consistency::NoiseMatch;
 use crate::estimation::model::{Inputs, Plant, Step, BAR, GAIN_REF, LAMINAR_REF, NX, P_REF, X_REF};
-use crate::estimation::quiet::Quietness;
+use crate::estimation::quiet::{self, Quietness};
 use crate::hypothesis::Hypothesis;
 use crate::params::{operating_region, ParamError, Params};
 use crate::physics::fluid::laminar_flow_factor;
@@ -268,6 +268,11 @@ impl<T: Real> Monitor<T> {
             self.spool_dt = self.plant.spool_step(dt);
             self.spool_sub = self.plant.spool_step(dt / self.cfg.substeps as f64);
         }
+        // Pinned with the valve open (an end stop): no leak evidence, and
+        // nothing for the leak states or valve gains to learn.
+        let region = operating_region(c.u_valve, self.cfg.hold_band);
+        let pinned = quiet::pinned(&c, region);
+        let no_evidence = suspect || pinned;
         let ctx = StepContext {
             inputs: Inputs {
                 p_supply_pa: T::from_f32(held.p_supply_bar) * T::c(BAR),
@@ -283,12 +288,12 @@ impl<T: Real> Monitor<T> {
             spool_dt: self.spool_dt,
             pressure_lag_s: self.cfg.pressure_lag_s,
             // A possibly frozen reading teaches the leak states nothing.
-            learning: if suspect {
+            learning: if no_evidence {
                 T::ZERO
             } else {
                 self.quiet.weight()
             },
-            gain_learning: if suspect {
+            gain_learning: if no_evidence {
                 T::ZERO
             } else {
                 self.quiet.gain_weight()
@@ -332,11 +337,10 @@ impl<T: Real> Monitor<T> {
         if warming {
             flags |= health::WARMING_UP;
         }
-        let region = operating_region(c.u_valve, self.cfg.hold_band);
         let facts = SampleFacts {
             dt: T::c(dt),
-            weight: self.quiet.weight(),
-            valid: !warming && !suspect && flags & health::FILTER_RESET == 0,
+            weight: if pinned { T::ZERO } else { self.quiet.weight() },
+            valid: !warming && !no_evidence && flags & health::FILTER_RESET == 0,
             region,
             t_s: sample.t_s,
         };

@@ -32,11 +32,34 @@
 //! of a litre). They learn with w_t·q²/(q² + q_g²).
 
 use crate::real::Real;
+use crate::signal::Conditioned;
 
 /// Smoothing time constant of the rates, s.
 const RATE_SMOOTHING_S: f64 = 0.02;
 /// Command rate at which w halves, 1/s (full travel in 2 s).
 const QUIET_COMMAND_RATE: f64 = 0.5;
+
+/// Band, bar, within which a chamber counts as sitting at the supply or
+/// the tank pressure: several σ of the transmitters' noise and offsets.
+const RAIL_BAND_BAR: f32 = 3.0;
+
+/// Is the piston pinned with the valve open, against an end stop or an
+/// obstacle? The valve opens toward one chamber (the operating `region`
+/// of `params::operating_region`: retracting 0, extending 2), that chamber sits at the supply pressure and the other at
+/// the tank's. The open edges then feed whatever leaks at a pressure drop
+/// far below the transmitters' offsets (1 l/min through an edge that
+/// passes 20 l/min at 35 bar drops 0.09 bar, against offsets of tenths of
+/// a bar): the model's metering flow hangs on those offsets, and neither
+/// leak can be told from it. Such a sample is no leak evidence. (The
+/// classic end-stop leak test closes the valve; a closed valve is a hold.)
+pub fn pinned(c: &Conditioned, region: usize) -> bool {
+    let (fed, drained) = match region {
+        0 => (c.p_rod_bar, c.p_piston_bar),
+        2 => (c.p_piston_bar, c.p_rod_bar),
+        _ => return false,
+    };
+    fed >= c.p_supply_bar - RAIL_BAND_BAR && drained <= c.p_tank_bar + RAIL_BAND_BAR
+}
 
 /// Tracks how quasi-steady the plant is.
 #[derive(Clone, Debug)]
@@ -166,6 +189,37 @@ impl<T: Real> Quietness<T> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn an_open_valve_into_a_chamber_at_the_supply_pressure_is_pinned() {
+        let band = (-0.01, 0.01);
+        let at = |u: f32, p_piston_bar: f32, p_rod_bar: f32| {
+            let region = crate::params::operating_region(u, band);
+            pinned(
+                &Conditioned {
+                    p_supply_bar: 50.0,
+                    p_piston_bar,
+                    p_rod_bar,
+                    p_tank_bar: 1.5,
+                    x_piston_m: 0.0,
+                    u_valve: u,
+                    temp_oil_c: None,
+                },
+                region,
+            )
+        };
+        // Against either end stop, the valve open into it.
+        assert!(at(-0.5, 1.6, 49.9));
+        assert!(at(0.5, 49.7, 1.4));
+        // Moving: the feeding chamber below the supply, or the drained
+        // one above the tank.
+        assert!(!at(-0.5, 26.0, 47.0));
+        assert!(!at(-0.5, 3.0, 35.0));
+        assert!(!at(0.5, 35.0, 11.0));
+        // Held, or the valve open away from the chamber at the supply.
+        assert!(!at(0.0, 1.6, 49.9));
+        assert!(!at(0.5, 1.6, 49.9));
+    }
 
     #[test]
     fn steady_plant_weighs_one_transients_near_zero_then_recover() {
