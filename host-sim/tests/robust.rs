@@ -432,21 +432,21 @@ fn at_an_end_stop_with_the_valve_open_the_move_is_not_taken_for_a_leak() {
     let cal = calibrated(4, 50.0, 40.0);
     let rows = plant::simulate(&spec.run());
     let mut m = Monitor::<f32>::new(&cal.params).unwrap();
-    // The detection reading at the stop.
+    // The detection reading and the reported size at the stop.
     let mut at_stop = Vec::new();
     let mut alarms = Vec::new();
     let mut last = None;
     for row in &rows {
         let s = m.step(&row_sample(row));
         if row.truth.at_end_stop && row.t > 4.0 {
-            at_stop.push(s.detect_external_lpm.unwrap());
+            at_stop.push((s.detect_external_lpm, s.leak_external_lpm));
         }
         alarms.extend(s.verdict.is_leak().then_some((s.t_s, s.verdict)));
         last = Some(s);
     }
     assert!(at_stop.len() > 5000, "the piston reached its end stop");
     assert!(
-        at_stop.iter().all(|&d| d == at_stop[0]),
+        at_stop.iter().all(|d| *d == at_stop[0]),
         "the stop is no evidence: {:?} … {:?}",
         at_stop.first(),
         at_stop.last()

@@ -339,8 +339,9 @@ impl<T: Real> Monitor<T> {
         }
         let facts = SampleFacts {
             dt: T::c(dt),
-            weight: if pinned { T::ZERO } else { self.quiet.weight() },
+            weight: self.quiet.weight(),
             valid: !warming && !no_evidence && flags & health::FILTER_RESET == 0,
+            observable: !pinned,
             region,
             t_s: sample.t_s,
         };

@@ -144,6 +144,11 @@ pub struct SampleFacts<T> {
     /// The sample counts as evidence at all (warm-up over, sensors
     /// trusted, no filter reset).
     pub valid: bool,
+    /// The plant shows the leaks at all. Not with the piston pinned
+    /// against a stop with the valve open: then the leak flows are not
+    /// followed either, and the reported sizes and detection readings keep
+    /// their values.
+    pub observable: bool,
     /// Operating region for the baseline and the alarm level: 0
     /// retracting, 1 holding, 2 extending.
     pub region: usize,
@@ -353,6 +358,7 @@ impl<T: Real> Decision<T> {
             dt,
             weight,
             valid,
+            observable,
             region,
             t_s,
         } = facts;
@@ -372,7 +378,9 @@ impl<T: Real> Decision<T> {
             // described by the model: what it reads then is no evidence
             // either way.
             valid &= !valve_gains_misfit(both.valve_gain);
-            self.follow_flows(both, dt, dt_w, region);
+            if observable {
+                self.follow_flows(both, dt, dt_w, region);
+            }
         }
         self.count_evidence(dt, if valid { weight } else { T::ZERO });
         if !valid {
@@ -636,6 +644,7 @@ mod tests {
             dt,
             weight,
             valid,
+            observable: true,
             region,
             t_s,
         }
@@ -790,6 +799,29 @@ mod tests {
             }
             assert_eq!(d.alarm_levels(), PerLeak::splat(gross), "region {region}");
         }
+    }
+
+    #[test]
+    fn where_the_plant_does_not_show_the_leaks_the_readings_keep_their_values() {
+        // 5 s reading no leak, then 5 s pinned at a stop reading 2 l/min:
+        // neither the size nor the detection reading follows, no alarm.
+        let mut d: Decision<f64> = Decision::new(&Params::nominal());
+        let mut events = Events::new();
+        for i in 0..5_000 {
+            d.update(
+                &outputs(0.0),
+                facts(0.001, 1.0, true, 2, i as f64 * 0.001),
+                &mut events,
+            );
+        }
+        let before = (d.leak_flows(), d.detection_flows());
+        for i in 5_000..10_000 {
+            let mut f = facts(0.001, 1.0, false, 2, i as f64 * 0.001);
+            f.observable = false;
+            d.update(&outputs(2.0), f, &mut events);
+        }
+        assert_eq!((d.leak_flows(), d.detection_flows()), before);
+        assert!(d.latched().is_empty());
     }
 
     #[test]
