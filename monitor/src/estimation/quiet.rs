@@ -45,8 +45,9 @@ const RAIL_BAND_BAR: f32 = 3.0;
 
 /// Is the piston pinned with the valve open, against an end stop or an
 /// obstacle? The valve opens toward one chamber (the operating `region`
-/// of `params::operating_region`: retracting 0, extending 2), that chamber sits at the supply pressure and the other at
-/// the tank's. The open edges then feed whatever leaks at a pressure drop
+/// of `params::operating_region`: retracting 0, extending 2), that
+/// chamber sits at the supply pressure and the other at the tank's. The
+/// open edges then feed whatever leaks at a pressure drop
 /// far below the transmitters' offsets (1 l/min through an edge that
 /// passes 20 l/min at 35 bar drops 0.09 bar, against offsets of tenths of
 /// a bar): the model's metering flow hangs on those offsets, and neither

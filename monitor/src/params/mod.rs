@@ -387,7 +387,9 @@ params_struct! {
         pub gain_prior: f64 = 0.08,
             in (0.0 ..= 1.0, ""),
         /// Random-walk intensity of the healthy laminar-leakage deviation
-        /// (relative)²/s: oil warms over minutes (≈ 2 %/√s).
+        /// (relative)²/s: oil warms over minutes (≈ 2 %/√s). 0 holds the
+        /// factor (calibration does so where the oil temperature is read):
+        /// the temperature is then a required reading.
         pub q_laminar: f64 = 4.0e-4,
             in (0.0 ..= 1.0, "1/s"),
         /// Prior 1σ of the laminar-leakage deviation (relative): 25 → 40 °C
