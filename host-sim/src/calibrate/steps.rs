@@ -301,8 +301,9 @@ fn laminar_factor_mode(
     fits: &mut Vec<Fit>,
     warnings: &mut Vec<String>,
 ) {
-    let held = p.filter.q_laminar == HELD_Q_LAMINAR && p.filter.laminar_prior == HELD_LAMINAR_PRIOR;
-    match (temperature, held) {
+    // The monitor's own test: a held factor makes it require the
+    // temperature, so a file it holds must not leave without one.
+    match (temperature, p.laminar_factor_held()) {
         (true, false) => {
             p.filter.q_laminar = HELD_Q_LAMINAR;
             p.filter.laminar_prior = HELD_LAMINAR_PRIOR;
@@ -324,7 +325,7 @@ fn laminar_factor_mode(
             what: "healthy laminar leakage factor".into(),
             value: format!(
                 "held (prior {:.0} %, no random walk); land leakage {:.4} l/min/bar per covered edge",
-                100.0 * HELD_LAMINAR_PRIOR,
+                100.0 * p.filter.laminar_prior,
                 p.valve.edge_leak_lpm_per_bar
             ),
             quality: "the recording reads the oil temperature: the viscosity follows it".into(),
@@ -475,6 +476,18 @@ mod tests {
         let mut warnings = Vec::new();
         laminar_factor_mode(&mut p, temperature, &mut Vec::new(), &mut warnings);
         (p, warnings)
+    }
+
+    #[test]
+    fn any_file_the_monitor_holds_is_set_free_without_a_temperature() {
+        // Held by hand with another prior: the monitor requires the
+        // temperature for it, so calibration without one frees it.
+        let mut p = Params::nominal();
+        p.filter.q_laminar = 0.0;
+        p.filter.laminar_prior = 0.2;
+        let (freed, w) = moded(p, false);
+        assert!(!freed.laminar_factor_held());
+        assert_eq!(w.len(), 1);
     }
 
     #[test]
