@@ -199,7 +199,8 @@ impl<T: Real> Monitor<T> {
         // test: none before the first or at an ignored sample, at most
         // 0.1 s across a gap.
         let held_s = match (self.last_t, dt) {
-            (Some(_), Some(dt)) => (dt as f32).min(0.1),
+            // (`Real::min`: `f32::min` is a call on the MCU; dt is finite.)
+            (Some(_), Some(dt)) => Real::min(dt as f32, 0.1),
             _ => 0.0,
         };
         let checked = self.checker.check(sample, held_s, &mut events);

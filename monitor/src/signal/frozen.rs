@@ -38,6 +38,7 @@
 //! constant: they are not tested.
 
 use crate::physics::valve::spool_at;
+use crate::real::Real;
 use crate::sample::{Channel, Sample};
 
 /// Rest time (valve not feeding) in completed runs before the noise-based
@@ -183,13 +184,13 @@ impl FrozenDetector {
             let bits = s.get(ch).map(f32::to_bits);
             if bits.is_none() || bits != run.bits {
                 if run.bits.is_some() {
-                    run.longest_s = run.longest_s.max(run.feeding_s + run.resting_s);
+                    run.longest_s = Real::max(run.longest_s, run.feeding_s + run.resting_s);
                     run.rest_s += run.resting_s;
                 }
                 *run = Run {
                     bits,
-                    x_min: f32::NAN,
-                    x_max: f32::NAN,
+                    x_min: f32::INFINITY,
+                    x_max: f32::NEG_INFINITY,
                     feeding_s: 0.0,
                     resting_s: 0.0,
                     ..*run
@@ -199,13 +200,15 @@ impl FrozenDetector {
                 continue;
             }
             if let Some(x) = x {
-                // NaN-safe: min/max ignore the NaN start.
-                run.x_min = run.x_min.min(x);
-                run.x_max = run.x_max.max(x);
+                // A NaN reading leaves the range as it is. (`Real`'s
+                // compare-and-select min/max: `f32::min`/`max` are calls
+                // to `fminf`/`fmaxf` on the MCU.)
+                run.x_min = Real::min(x, run.x_min);
+                run.x_max = Real::max(x, run.x_max);
             }
             let held_s = run.feeding_s + run.resting_s;
-            let noise =
-                run.rest_s >= LEARN_S && held_s >= REST_MIN_S.max(NOISE_FACTOR * run.longest_s);
+            let noise = run.rest_s >= LEARN_S
+                && held_s >= Real::max(REST_MIN_S, NOISE_FACTOR * run.longest_s);
             let motion = held_s >= FROZEN_S
                 && match ch {
                     Channel::XPiston => run.feeding_s >= FEEDING_MIN_S,
@@ -219,7 +222,7 @@ impl FrozenDetector {
                 out.frozen |= ch.bit();
             }
             let suspect = (run.rest_s >= LEARN_S
-                && held_s >= SUSPECT_MIN_S.max(SUSPECT_FACTOR * run.longest_s))
+                && held_s >= Real::max(SUSPECT_MIN_S, SUSPECT_FACTOR * run.longest_s))
                 || (ch == Channel::XPiston && run.feeding_s >= SUSPECT_FEEDING_S);
             if suspect || noise || motion {
                 out.suspect |= ch.bit();
