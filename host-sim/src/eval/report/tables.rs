@@ -30,8 +30,8 @@ pub fn leak_table(out: &mut String, runs: &[&RunResult]) {
     let mut keys: Vec<_> = leaks.iter().map(|r| key(r)).collect();
     keys.sort_unstable();
     keys.dedup();
-    let _ = writeln!(out, "| leak | l/min | runs | detected | isolated | false alarms | latency after onset s, median (max) | after flow ≥ alarm level s, median (max) | median size error |");
-    let _ = writeln!(out, "|---|---|---|---|---|---|---|---|---|");
+    let _ = writeln!(out, "| leak | l/min | runs | detected | isolated | false alarms | ended `healthy` | latency after onset s, median (max) | after flow ≥ alarm level s, median (max) | median size error |");
+    let _ = writeln!(out, "|---|---|---|---|---|---|---|---|---|---|");
     for k in keys {
         let rs: Vec<&RunResult> = leaks.iter().copied().filter(|r| key(r) == k).collect();
         let n = rs.len();
@@ -41,12 +41,13 @@ pub fn leak_table(out: &mut String, runs: &[&RunResult]) {
         let kind = rs[0].spec.leak_kind();
         let _ = writeln!(
             out,
-            "| {kind}{} | {:.2} | {n} | {} | {} | {} | {} | {} | {} |",
+            "| {kind}{} | {:.2} | {n} | {} | {} | {} | {} | {} | {} | {} |",
             if k.0 { ", after the hold" } else { "" },
             k.2 as f64 / 1e4,
             pct(rs.iter().filter(|r| r.detected()).count(), n),
             pct(rs.iter().filter(|r| r.isolated()).count(), n),
             pct(rs.iter().filter(|r| r.false_alarm()).count(), n),
+            pct(rs.iter().filter(|r| r.verdict == HEALTHY).count(), n),
             med_max(&lat, 2),
             med_max(&flow, 2),
             median(&err).map_or("–".into(), |v| format!("{:.0} %", 100.0 * v)),
@@ -54,7 +55,7 @@ pub fn leak_table(out: &mut String, runs: &[&RunResult]) {
     }
     let _ = writeln!(
         out,
-        "\nLeaks start at {ONSET_S} s (0.3 l/min also from the start: detection, isolation and size counted, latency not); the after-the-hold leak starts once the piston has held for the hold's length (600 s; `--quick`: 120 s), located in the healthy twin's truth; the plant's work cycle resumes 1–8 s later and the run ends 8–15 s after the hold.\n"
+        "\nLeaks start at {ONSET_S} s (0.3 l/min also from the start: detection, isolation and size counted, latency not); the after-the-hold leak starts once the piston has held for the hold's length (600 s; `--quick`: 120 s), located in the healthy twin's truth; the plant's work cycle resumes 1–8 s later and the run ends 8–15 s after the hold. Ended `healthy`: a leak run whose final verdict claims a healthy cylinder (a leak below this installation's detection level, or one the monitor did not see); `inconclusive` is not counted there.\n"
     );
 }
 
