@@ -101,8 +101,10 @@ pub mod health {
     pub const LEAK_WARNING: u16 = 1 << 5;
     /// A leak alarm is latched (cleared only by acknowledgement).
     pub const ALARM_LATCHED: u16 = 1 << 6;
-    /// Even the best hypothesis fits the data poorly (model mismatch:
-    /// recalibrate).
+    /// Even the best hypothesis fits the data poorly, or a leak reading
+    /// stands above its alarm level while the model probabilities do not
+    /// support that leak (model mismatch: the verdict is `inconclusive`;
+    /// recalibrate if it persists).
     pub const MODEL_MISMATCH: u16 = 1 << 7;
     /// The sample time did not increase: sample ignored.
     pub const TIME_NOT_INCREASING: u16 = 1 << 8;

@@ -8,10 +8,14 @@
 //!    detection and over `evidence_window_s` for the reported size. Each
 //!    leak has a CUSUM on the relative excess of its fast average F over
 //!    the alarm level A, in evidence time: g ← max(0, g + w·dt·(F − A)/A),
-//!    the excess clipped to [−1, 4]. The alarm is raised when g reaches
-//!    `debounce_s`: after 1 s at twice the alarm level, ¼ s at five times,
-//!    5 s at 1.2 times; a reading that only touches the level never
-//!    alarms. Raised leaks go to the one leak-alarm latch ([`latch`]):
+//!    the excess clipped to [−1, 4] (F is the average less 2σ of the
+//!    estimate). The alarm is raised when g reaches `debounce_s` (0.5 s by
+//!    default): after ½ s of evidence at twice the alarm level, ⅛ s at
+//!    five times, 2.5 s at 1.2 times; a reading that only touches the level
+//!    never alarms. The same excess where the model probabilities do not
+//!    support the leak is a contradiction, counted apart: reaching the
+//!    debounce time it makes the verdict `inconclusive`
+//!    ([`Decision::conclusive`]), never `healthy`. Raised leaks go to the one leak-alarm latch ([`latch`]):
 //!    they stay until acknowledged, and a new leak while one is latched
 //!    escalates (internal + external = both); with one leak raised, the
 //!    other must also read more than [`CROSS_TALK`] × its flow (the
@@ -40,7 +44,8 @@
 //!    (re)started, a recent evidence weight (average over
 //!    `evidence_memory_s`) of at least `min_evidence_fraction`, no filter
 //!    reset within the warm-up time, and a model that fits (mean NIS of
-//!    the best filter below [`MISMATCH_NIS`]). Without that the verdict is
+//!    the best filter below [`MISMATCH_NIS`], and no leak reading the
+//!    probabilities contradict). Without that the verdict is
 //!    `inconclusive` ([`Decision::conclusive`]). A sample at which the
 //!    `both` filter holds valve flow gains beyond [`VALVE_GAIN_MISFIT`]
 //!    counts as no evidence at all: the valve model does not describe the
