@@ -278,6 +278,23 @@ fn noise_is_estimated_and_leak_flows_are_never_negative() {
 /// Development rig `rig` at `supply_bar`, `temp_c` calibrated from the
 /// nominal parameters as `host-sim eval` does it: from the cell's 60 s
 /// healthy recording in the full matrix's plan.
+/// The development run `id` of the full matrix's plan (its cell: rig,
+/// supply bar, °C) and a monitor with that cell's calibration, as `eval`
+/// runs it.
+fn development_run(
+    id: &str,
+    (rig, supply_bar, temp_c): (u64, f64, f64),
+) -> (Vec<plant::Row>, Monitor<f32>) {
+    let plan = plan(&PlanConfig::default());
+    let spec = plan
+        .specs()
+        .find(|s| s.id == id)
+        .unwrap_or_else(|| panic!("no development run {id}"));
+    let cal = calibrated(rig, supply_bar, temp_c);
+    let rows = plant::simulate(&spec.run());
+    (rows, Monitor::<f32>::new(&cal.params).unwrap())
+}
+
 fn calibrated(rig: u64, supply_bar: f64, temp_c: f64) -> Calibration {
     calibrated_from(&calibration_run(rig, supply_bar, temp_c))
 }
@@ -427,14 +444,7 @@ fn at_an_end_stop_with_the_valve_open_the_move_is_not_taken_for_a_leak() {
     // then the piston sits at the end stop with the valve open, where the
     // leaks cannot be seen. Counted as evidence, the state's slow decay
     // there raised a false `external` alarm.
-    let plan = plan(&PlanConfig::default());
-    let spec = plan
-        .specs()
-        .find(|s| s.id == "dev/rig4/50bar/40C/healthy-step")
-        .expect("the development step test");
-    let cal = calibrated(4, 50.0, 40.0);
-    let rows = plant::simulate(&spec.run());
-    let mut m = Monitor::<f32>::new(&cal.params).unwrap();
+    let (rows, mut m) = development_run("dev/rig4/50bar/40C/healthy-step", (4, 50.0, 40.0));
     // The detection reading and the reported size at the stop.
     let mut at_stop = Vec::new();
     let mut alarms = Vec::new();
@@ -468,14 +478,7 @@ fn a_leak_reading_the_model_probabilities_contradict_is_never_healthy() {
     // their complexity penalty), so no alarm may be raised. Nor may the
     // verdict stay `healthy` once that reading has stood above the alarm
     // level for the debounce time: it used to end `healthy`.
-    let plan = plan(&PlanConfig::default());
-    let spec = plan
-        .specs()
-        .find(|s| s.id == "dev/rig2/50bar/25C/step-internal-1.00")
-        .expect("the development step test");
-    let cal = calibrated(2, 50.0, 25.0);
-    let rows = plant::simulate(&spec.run());
-    let mut m = Monitor::<f32>::new(&cal.params).unwrap();
+    let (rows, mut m) = development_run("dev/rig2/50bar/25C/step-internal-1.00", (2, 50.0, 25.0));
     let mut contradicted = None;
     let mut last = None;
     for row in &rows {
