@@ -275,26 +275,23 @@ fn noise_is_estimated_and_leak_flows_are_never_negative() {
     assert!((0.25..0.5).contains(&sigma), "piston chamber σ {sigma} bar");
 }
 
-/// Development rig `rig` at `supply_bar`, `temp_c` calibrated from the
-/// nominal parameters as `host-sim eval` does it: from the cell's 60 s
-/// healthy recording in the full matrix's plan.
-/// The development run `id` of the full matrix's plan (its cell: rig,
-/// supply bar, °C) and a monitor with that cell's calibration, as `eval`
-/// runs it.
-fn development_run(
-    id: &str,
-    (rig, supply_bar, temp_c): (u64, f64, f64),
-) -> (Vec<plant::Row>, Monitor<f32>) {
+/// The development run `id` of the full matrix's plan and a monitor with
+/// its cell's calibration, as `eval` runs it.
+fn development_run(id: &str) -> (Vec<plant::Row>, Monitor<f32>) {
     let plan = plan(&PlanConfig::default());
     let spec = plan
         .specs()
         .find(|s| s.id == id)
         .unwrap_or_else(|| panic!("no development run {id}"));
-    let cal = calibrated(rig, supply_bar, temp_c);
+    let c = &spec.cell;
+    let cal = calibrated(c.rig, c.supply_bar, c.temp_c);
     let rows = plant::simulate(&spec.run());
     (rows, Monitor::<f32>::new(&cal.params).unwrap())
 }
 
+/// Development rig `rig` at `supply_bar`, `temp_c` calibrated from the
+/// nominal parameters as `host-sim eval` does it: from the cell's 60 s
+/// healthy recording in the full matrix's plan.
 fn calibrated(rig: u64, supply_bar: f64, temp_c: f64) -> Calibration {
     calibrated_from(&calibration_run(rig, supply_bar, temp_c))
 }
@@ -444,7 +441,7 @@ fn at_an_end_stop_with_the_valve_open_the_move_is_not_taken_for_a_leak() {
     // then the piston sits at the end stop with the valve open, where the
     // leaks cannot be seen. Counted as evidence, the state's slow decay
     // there raised a false `external` alarm.
-    let (rows, mut m) = development_run("dev/rig4/50bar/40C/healthy-step", (4, 50.0, 40.0));
+    let (rows, mut m) = development_run("dev/rig4/50bar/40C/healthy-step");
     // The detection reading and the reported size at the stop.
     let mut at_stop = Vec::new();
     let mut alarms = Vec::new();
@@ -478,22 +475,20 @@ fn a_leak_reading_the_model_probabilities_contradict_is_never_healthy() {
     // their complexity penalty), so no alarm may be raised. Nor may the
     // verdict stay `healthy` once that reading has stood above the alarm
     // level for the debounce time: it used to end `healthy`.
-    let (rows, mut m) = development_run("dev/rig2/50bar/25C/step-internal-1.00", (2, 50.0, 25.0));
-    let mut contradicted = None;
+    let (rows, mut m) = development_run("dev/rig2/50bar/25C/step-internal-1.00");
+    let mut contradicted = false;
     let mut last = None;
     for row in &rows {
         let s = m.step(&row_sample(row));
         assert!(!s.verdict.is_leak(), "t {}: {:?}", s.t_s, s.verdict);
-        if contradicted.is_none() && s.health & health::MODEL_MISMATCH != 0 {
-            contradicted = Some(s.t_s);
-        }
-        if contradicted.is_some() {
+        contradicted |= s.health & health::MODEL_MISMATCH != 0;
+        if contradicted {
             assert_ne!(s.verdict, Verdict::Healthy, "t {}", s.t_s);
         }
         last = Some(s);
     }
     let last = last.unwrap();
-    assert!(contradicted.is_some(), "the contradiction is flagged");
+    assert!(contradicted, "the contradiction is flagged");
     assert_eq!(last.verdict, Verdict::Inconclusive);
 }
 

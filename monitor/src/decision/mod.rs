@@ -15,9 +15,10 @@
 //!    never alarms. The same excess where the model probabilities do not
 //!    support the leak is a contradiction, counted apart: reaching the
 //!    debounce time it makes the verdict `inconclusive`
-//!    ([`Decision::conclusive`]), never `healthy`. Raised leaks go to the one leak-alarm latch ([`latch`]):
-//!    they stay until acknowledged, and a new leak while one is latched
-//!    escalates (internal + external = both); with one leak raised, the
+//!    ([`Decision::conclusive`]), never `healthy`. Raised leaks go to the
+//!    one leak-alarm latch ([`latch`]): they stay until acknowledged,
+//!    and a new leak while one is latched escalates (internal + external
+//!    = both); with one leak raised, the
 //!    other must also read more than [`CROSS_TALK`] × its flow (the
 //!    model's error shares flow between the two). The alarm level is the
 //!    user's, raised to the installation's floor in the current operating
