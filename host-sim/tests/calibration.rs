@@ -390,26 +390,64 @@ fn only_extend_moves_are_refused_naming_retraction() {
 }
 
 #[test]
-fn a_valve_read_back_that_changes_scale_is_refused() {
+fn a_valve_read_back_that_changes_scale_is_never_taken_for_the_valve() {
     // The command read-back scaled by 0.7 from halfway (a loose connector,
-    // a changed amplifier card): the valve follows no single curve. From
-    // 30 s it spoils the two-thirds fit; from 45 s only the held-out part
-    // and the refit on the whole recording.
+    // a changed amplifier card): the valve follows no single curve.
     let (rig, sensors) = (perturbed_rig(5), SensorModel::default());
     let clean = healthy_run(&rig, &sensors, 51);
-    for from_s in [30.0, 45.0] {
+    let scaled_from = |from_s: f64| {
         let mut s = clean.clone();
         for x in s.iter_mut().filter(|x| x.t_s > from_s) {
             x.u_valve = x.u_valve.map(|u| 0.7 * u);
         }
-        let e = calibrate(&s, &Params::nominal()).unwrap_err();
-        assert!(
+        calibrate(&s, &Params::nominal())
+    };
+    // From 45 s the first two thirds fit a valve and the held-out third
+    // contradicts it: refused.
+    let e = scaled_from(45.0).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            CalibrationError::PoorFit { .. } | CalibrationError::ValidationFailed { .. }
+        ),
+        "{e}"
+    );
+    // From 30 s no part fits a valve: refused, or (as now) a partial
+    // calibration that keeps the reference valve, says why, and raises
+    // the detection floor well above the alarm level.
+    match scaled_from(30.0) {
+        Err(e) => assert!(
             matches!(
                 e,
                 CalibrationError::PoorFit { .. } | CalibrationError::ValidationFailed { .. }
             ),
-            "from {from_s} s: {e}"
-        );
+            "{e}"
+        ),
+        Ok(c) => {
+            assert!(c.partial);
+            assert!(
+                c.warnings
+                    .iter()
+                    .any(|w| w.starts_with("valve not fitted (kept)")
+                        && w.contains("does not follow the command as a valve's does")),
+                "{:?}",
+                c.warnings
+            );
+            let b = &c.params.baseline;
+            let reference = Params::nominal().valve;
+            let v = &c.params.valve;
+            assert_eq!(
+                [
+                    v.flow_gain_extend_lpm_sqrt_bar,
+                    v.flow_gain_retract_lpm_sqrt_bar
+                ],
+                [
+                    reference.flow_gain_extend_lpm_sqrt_bar,
+                    reference.flow_gain_retract_lpm_sqrt_bar
+                ]
+            );
+            assert!(b.detection_floor_lpm[0] > 0.3, "{b:?}");
+        }
     }
 }
 

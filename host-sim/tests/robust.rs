@@ -320,38 +320,33 @@ fn assert_warns(cal: &Calibration, what: impl Fn(&str) -> bool) {
 }
 
 #[test]
-fn calibration_bounds_the_laminar_leakage_where_the_installation_allows_it() {
-    use host_sim::calibrate::UNBOUNDED_LAMINAR_FACTOR;
+fn calibration_keeps_the_laminar_leakage_bounded_where_the_model_describes_the_valve() {
     let start = Params::nominal();
     assert!(start.filter.laminar_factor_min > 0.0);
-    // Development rig 6 (100 bar, 40 °C): with the bound, the valve fit
-    // is implausible and the calibration would be refused; without it,
-    // the installation is described, and the report says so first.
+    // Development rig 6 (100 bar, 40 °C) needed the bound relaxed while
+    // the covered edges' land leakage could not grow with the spool (the
+    // valve fit was implausible with it); with that growth its valve is
+    // described with the bound.
     let cal = calibrated(6, 100.0, 40.0);
     assert_eq!(
         cal.params.filter.laminar_factor_min,
-        UNBOUNDED_LAMINAR_FACTOR
+        start.filter.laminar_factor_min
     );
     assert!(
-        cal.warnings[0].starts_with("healthy laminar leakage not bounded"),
+        !cal.warnings
+            .iter()
+            .any(|w| w.starts_with("healthy laminar leakage not bounded")),
         "{:?}",
         cal.warnings
     );
-    // The installation file keeps the relaxed bound (the rest of the
-    // filter tuning is the monitor version's).
-    let text = cal.to_toml("rig 6").unwrap();
-    let back: Params = toml::from_str(&text).unwrap();
-    assert_eq!(back.filter.laminar_factor_min, UNBOUNDED_LAMINAR_FACTOR);
-    assert_eq!(back.filter.q_leak, start.filter.q_leak);
-    // Development rig 4 (100 bar, 25 °C) keeps the bound.
+    // Development rig 4 (100 bar, 25 °C) keeps the bound too.
     let cal = calibrated(4, 100.0, 25.0);
     assert_eq!(
         cal.params.filter.laminar_factor_min,
         start.filter.laminar_factor_min
     );
-    // Its covered edges stay symmetric (the holds are too short, or the
-    // fitted asymmetry does not lower its healthy readings), and the
-    // report says why.
+    // Its covered edges stay symmetric without growth (no candidate
+    // lowers its healthy readings), and the report says why.
     let v = &cal.params.valve;
     assert_eq!(
         [
@@ -467,6 +462,33 @@ fn at_an_end_stop_with_the_valve_open_the_move_is_not_taken_for_a_leak() {
 }
 
 #[test]
+fn an_internal_leak_the_loop_feeds_through_the_covered_edges_is_isolated() {
+    // Development rig 5 at 100 bar, 40 °C, a 0.2 l/min internal leak from
+    // 30 s: at the holds the loop makes up for it by moving the spool a
+    // little off centre, where the covered edges' land leakage grows
+    // steeply. With the thesis' constant land leakage (and a linear skew
+    // bounded so that no edge leaks backwards) the model saw no flow for
+    // that spool shift and the run ended `healthy`. Calibration now fits
+    // how fast the leakage grows from the holds (the healthy readings drop
+    // from 2.4 l/min with symmetric edges to 0.05), and the leak is
+    // isolated (at 34.9 s in the eval).
+    let cal = calibrated(5, 100.0, 40.0);
+    let v = &cal.params.valve;
+    assert!(v.edge_leak_spool_gain > 10.0, "{v:?} {:?}", cal.warnings);
+    let (rows, mut m) = development_run("dev/rig5/100bar/40C/internal-0.20-on30");
+    let mut first = None;
+    for row in &rows {
+        let s = m.step(&row_sample(row));
+        if first.is_none() && s.verdict.is_leak() {
+            first = Some((s.t_s, s.verdict));
+        }
+    }
+    let (t, verdict) = first.expect("the leak is alarmed");
+    assert_eq!(verdict, Verdict::Internal, "at {t} s");
+    assert!(t > 30.0 && t < 40.0, "alarmed at {t} s");
+}
+
+#[test]
 fn a_leak_reading_the_model_probabilities_contradict_is_never_healthy() {
     // Development rig 2 at 50 bar, 25 °C, its step test with a 1 l/min
     // internal leak: in the hold before the step the `both` filter reads
@@ -507,23 +529,32 @@ fn calibration_keeps_an_edge_asymmetry_only_where_it_lowers_the_healthy_readings
         v.edge_leak_skew_a != 0.0 && v.edge_leak_skew_b != 0.0,
         "{v:?}"
     );
-    // The eval's calibration of this cell reports "…: symmetric 0.339,
-    // fitted 0.118, fitted without spool gain 0.200": the kept candidate
-    // beat the symmetric edges by 5 %.
-    let score = |name: &str| -> f64 {
-        let at = fit.quality.find(&format!("{name} ")).expect(name) + name.len() + 1;
-        let tail = &fit.quality[at..];
-        tail[..tail.find([',', ';']).unwrap_or(tail.len())]
-            .trim()
-            .parse()
-            .expect(name)
-    };
-    let kept = if v.edge_leak_spool_gain != 0.0 {
-        score("fitted")
-    } else {
-        score("fitted without spool gain")
-    };
-    assert!(kept < 0.95 * score("symmetric"), "{}", fit.quality);
+    // The report lists each candidate's healthy readings, "…: symmetric
+    // 0.339, symmetric growing 0.2, fitted 0.118, …": the kept one beat
+    // the symmetric edges by 5 %.
+    let list = fit
+        .quality
+        .split("l/min): ")
+        .nth(1)
+        .unwrap_or_else(|| panic!("no candidate figures: {}", fit.quality));
+    let scores: Vec<(&str, f64)> = list
+        .split(", ")
+        .filter_map(|c| {
+            let (name, score) = c.rsplit_once(' ')?;
+            Some((name, score.parse().ok()?))
+        })
+        .collect();
+    let symmetric = scores
+        .iter()
+        .find(|(n, _)| *n == "symmetric")
+        .expect("the symmetric edges' figure")
+        .1;
+    let best = scores
+        .iter()
+        .filter(|(n, _)| *n != "symmetric")
+        .map(|(_, s)| *s)
+        .fold(f64::INFINITY, f64::min);
+    assert!(best < 0.95 * symmetric, "{}", fit.quality);
 }
 
 #[test]
@@ -587,10 +618,10 @@ fn an_installation_described_only_coarsely_is_calibrated_with_a_high_floor() {
     use host_sim::calibrate::MAX_DETECTION_FLOOR_LPM;
     // Development rig 1 (50 bar, 40 °C): its valve does not fit the
     // model's (edge ratio 1.44), and with the reference valve the healthy
-    // internal readings reach 1.4 l/min retracting and holding. That is
-    // still a monitor for gross leaks, one that does not alarm falsely as
-    // the nominal parameters do: the floor is raised, and calibrate says
-    // so.
+    // readings reach 0.8 l/min retracting and holding. That is still a
+    // monitor for gross leaks, one that does not alarm falsely as the
+    // nominal parameters do: the floor is raised (to 1.2 l/min), and
+    // calibrate says so.
     let cal = calibrated(1, 50.0, 40.0);
     let b = &cal.params.baseline;
     let highest = b
@@ -598,7 +629,7 @@ fn an_installation_described_only_coarsely_is_calibrated_with_a_high_floor() {
         .iter()
         .chain(&b.region_floor_external_lpm)
         .fold(0.0f64, |m, &f| m.max(f));
-    assert!(highest > 2.0 && highest <= MAX_DETECTION_FLOOR_LPM, "{b:?}");
+    assert!(highest > 1.0 && highest <= MAX_DETECTION_FLOOR_LPM, "{b:?}");
     assert_warns(&cal, |w| w.starts_with("detection floor"));
 }
 

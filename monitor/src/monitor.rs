@@ -280,6 +280,7 @@ impl<T: Real> Monitor<T> {
                 p_tank_pa: T::from_f32(held.p_tank_bar) * T::c(BAR),
                 u_valve: T::from_f32(held.u_valve),
                 laminar_factor: self.laminar_factor,
+                land: self.plant.land_leak(T::from_f32(held.u_valve)),
             },
             step: Step {
                 dt: T::c(dt),

@@ -1,12 +1,13 @@
 //! Fit steps 1–5 on (part of) a recording, the held-out part, the quality checks.
 
-use super::fit::{self, Motion, Quality};
+use super::fit::{self, Growth, Motion, Quality};
 use super::{
     check, CalibrationError, Fit, Mechanics, ALL, FIT_FRACTION, HELD_EDGE_LEAK_SCALE,
     HELD_LAMINAR_PRIOR, HELD_Q_LAMINAR, LENIENT_VALVE_R2, LENIENT_VALVE_RESIDUAL,
     MAX_FORCE_EXCESS_N, MAX_VALVE_RESIDUAL, MIN_REGION_EVIDENCE_S, MIN_VALVE_R2, REGIONS,
 };
 use monitor::physics::units::{LEAK_UNIT, LPM_PER_M3S};
+use monitor::physics::valve::MAX_LAND_EXPONENT;
 use monitor::{Params, Sample};
 
 /// One run of fit steps 1–5 on (part of) a recording.
@@ -211,14 +212,44 @@ pub(super) fn fit_plant(
     if search_air {
         fit_air(samples, &mut p, &mut fits, &mut warnings)?;
     }
-    // 1b. The covered edges' asymmetry, from the holds: a candidate is
+    // 1b. The covered edges' land leakage, from the holds: a candidate is
     // kept only if the healthy detection readings (what sets the
-    // detection floor) come out lower with it after steps 4–5.
-    let mut cands = vec![("symmetric", p.clone(), None)];
-    let holds = fit::EdgeHolds::of(&d, &p);
-    for (spool, name) in [(true, "fitted"), (false, "fitted without spool gain")] {
+    // detection floor) come out lower with it after steps 4–5. The first
+    // is the default: the thesis' symmetric edges, whose leakage does not
+    // change with the spool.
+    let symmetric = |growth: f64| {
         let mut q = p.clone();
-        if let Some(f) = fit::fit_edge_leak(&holds, &mut q, spool, &mut warnings) {
+        q.valve.edge_leak_skew_a = 0.0;
+        q.valve.edge_leak_skew_b = 0.0;
+        q.valve.edge_leak_spool_gain = growth.min(MAX_LAND_EXPONENT / q.valve.dead_zone);
+        q
+    };
+    let growing = Fit {
+        what: "covered valve edges (land leakage asymmetry)".into(),
+        value: format!(
+            "symmetric, growth {LAND_GROWTH_PRIOR:.0} e-folds per travel (a typical servo valve's)"
+        ),
+        quality: String::new(),
+    };
+    let mut cands = vec![
+        ("symmetric", symmetric(0.0), None),
+        (
+            "symmetric growing",
+            symmetric(LAND_GROWTH_PRIOR),
+            Some(growing),
+        ),
+    ];
+    let holds = fit::EdgeHolds::of(&d, &p);
+    for (growth, name) in [
+        (Growth::Search, "fitted"),
+        (
+            Growth::Fixed(LAND_GROWTH_PRIOR),
+            "fitted at the typical growth",
+        ),
+        (Growth::Fixed(0.0), "fitted without growth"),
+    ] {
+        let mut q = p.clone();
+        if let Some(f) = fit::fit_edge_leak(&holds, &mut q, growth, &mut warnings) {
             cands.push((name, q, Some(f)));
         }
     }
@@ -254,14 +285,17 @@ pub(super) fn fit_plant(
     };
     match fin.edge {
         Some(mut f) => {
+            if !f.quality.is_empty() {
+                f.quality += "; ";
+            }
             f.quality += &format!(
-                "; healthy detection readings (internal + external, l/min): {}",
+                "healthy detection readings (internal + external, l/min): {}",
                 scores.join(", ")
             );
             fits.push(f);
         }
         None if scores.len() > 1 => warnings.push(format!(
-            "covered valve edges kept symmetric: the fitted asymmetry does not lower the healthy detection readings by 5 % (internal + external, l/min: {})",
+            "covered valve edges kept symmetric: no other candidate lowers the healthy detection readings by 5 % (internal + external, l/min: {})",
             scores.join(", ")
         )),
         None => {}
@@ -272,6 +306,12 @@ pub(super) fn fit_plant(
     let p = fin.params;
     done(p, fits, warnings, quality, baseline_notes)
 }
+
+/// Growth rate of the covered edges' land leakage calibration tries
+/// besides the one the holds fit, e-folds per unit of spool travel: a servo
+/// valve's leakage at null grows e-fold every 0.005–0.02 of travel (its
+/// pressure gain), and this is the middle of that range.
+pub const LAND_GROWTH_PRIOR: f64 = 100.0;
 
 /// Whether the recording reads the oil temperature.
 fn has_temperature(samples: &[&[Sample]]) -> bool {

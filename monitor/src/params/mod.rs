@@ -175,20 +175,22 @@ params_struct! {
         /// the flow law differentiable at Δp = 0.
         pub laminar_dp_bar: f64 = 1.0,
             in (1.0e-3 ..= 50.0, "bar"),
-        /// Asymmetry of chamber A's two covered edges: P→A leaks
-        /// `edge_leak_lpm_per_bar`·(1 + s), A→T ·(1 − s), so the chamber's
-        /// leak-only equilibrium sits s·(p_S − p_T)/2 above mid-pressure.
-        /// Fitted by calibration from the holds; 0: symmetric edges.
+        /// Asymmetry of chamber A's two covered edges: with the spool
+        /// centred P→A leaks `edge_leak_lpm_per_bar`·(1 + s), A→T ·(1 − s),
+        /// so the chamber's leak-only equilibrium sits s·(p_S − p_T)/2
+        /// above mid-pressure. Fitted by calibration from the holds; 0:
+        /// symmetric edges.
         pub edge_leak_skew_a: f64 = 0.0,
             in (-0.95 ..= 0.95, ""),
         /// As above for chamber B: P→B ·(1 + s), B→T ·(1 − s).
         pub edge_leak_skew_b: f64 = 0.0,
             in (-0.95 ..= 0.95, ""),
-        /// How the covered edges' leakage shifts with spool travel inside
-        /// the dead zone (a servo valve's pressure gain at null), per unit
-        /// of travel: positive travel adds g·x_v to chamber A's skew and
-        /// takes it from chamber B's (x_v held to ±`dead_zone`).
-        /// Fitted by calibration from the holds; 0: no shift.
+        /// How fast a covered edge's land leakage grows as spool travel
+        /// uncovers it, e-folds per unit of travel (1/λ): P→A and B→T leak
+        /// ·e^(g·x_v), A→T and P→B ·e^(−g·x_v), x_v held to ±`dead_zone`
+        /// (g·`dead_zone` ≤ 8). A servo valve's pressure gain at null: a
+        /// few hundredths of travel is one e-fold (g = 50–200). Fitted by
+        /// calibration from the holds; 0: no growth.
         pub edge_leak_spool_gain: f64 = 0.0,
             in (0.0 ..= 200.0, ""),
     }

@@ -5,6 +5,7 @@
 use super::bounds::{ParamError, Problem};
 use super::Params;
 use crate::physics::load::load_terms_exact;
+use crate::physics::valve::MAX_LAND_EXPONENT;
 
 /// The filter's time constants must span at least this many sample
 /// periods: a shorter one is a step, not an average.
@@ -111,15 +112,15 @@ impl Params {
                 "",
             ));
         }
-        // No covered edge may leak backwards anywhere in the dead zone.
-        let skew = v.edge_leak_skew_a.abs().max(v.edge_leak_skew_b.abs())
-            + v.edge_leak_spool_gain * v.dead_zone;
-        if !(skew <= 0.95) {
+        // The land leakage's growth over the dead zone stays in the range
+        // the model's exponential is accurate for.
+        let exponent = v.edge_leak_spool_gain * v.dead_zone;
+        if !(exponent <= MAX_LAND_EXPONENT) {
             return Err(relation(
                 "valve.edge_leak_spool_gain",
-                skew,
-                "(its product with valve.dead_zone plus the larger of |valve.edge_leak_skew_a|, |valve.edge_leak_skew_b|) must be ≤ 0.95 (no covered edge leaks backwards):",
-                0.95,
+                exponent,
+                "(its product with valve.dead_zone, the land leakage's e-folds over the dead zone) must be ≤",
+                MAX_LAND_EXPONENT,
                 "",
             ));
         }

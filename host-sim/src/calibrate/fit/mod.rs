@@ -6,7 +6,9 @@ use monitor::physics::fluid::bulk_modulus_exact;
 use monitor::physics::friction::stribeck_decay;
 use monitor::physics::load::load_terms_exact;
 use monitor::physics::units::{BAR, LPM_PER_M3S};
-use monitor::physics::valve::{command_for, orifice, spool_at, OPENING_ROUNDING};
+use monitor::physics::valve::{
+    command_for, orifice, spool_at, MAX_LAND_EXPONENT, OPENING_ROUNDING,
+};
 use monitor::Params;
 
 /// Samples each side of the centre for smoothing/differentiation.
@@ -537,15 +539,45 @@ pub const MIN_HOLD_S: f64 = 0.5;
 /// Spread (σ) of the spool position over the hold samples, fraction of
 /// travel, below which the spool's pressure gain is not fitted.
 const MIN_HOLD_SPOOL_SPREAD: f64 = 5e-4;
-/// Largest edge asymmetry the fit may give (|skew| + gain·dead zone).
+/// Largest edge asymmetry |skew| the fit may give.
 const MAX_SKEW: f64 = 0.9;
+/// Largest growth rate of the land leakage, e-folds per unit of spool
+/// travel (`valve.edge_leak_spool_gain`'s range).
+const EDGE_LEAK_SPOOL_GAIN_MAX: f64 = 200.0;
+/// Candidate growth rates of the land leakage (e-folds per unit of spool
+/// travel) the fit tries between 1 and its largest, log-spaced.
+const SPOOL_GAIN_CANDIDATES: usize = 64;
+
+/// One hold sample for the covered-edge fit: the spool position and, in
+/// units of the symmetric edge's leakage at the full supply-to-tank drop
+/// k·(p2 − p5), each edge's pressure drop and the land flow each chamber's
+/// continuity calls for.
+#[derive(Clone, Copy, Debug)]
+struct HoldRow {
+    /// Spool position, fraction of travel.
+    xv: f64,
+    /// (p2 − p3, p3 − p5, p2 − p4, p4 − p5) / (p2 − p5).
+    drop: [f64; 4],
+    /// Land flow into A and into B / (k·(p2 − p5)).
+    need: [f64; 2],
+}
+
+impl HoldRow {
+    /// Land flow into A and B the edges give at growth `e` = e^(g·x_v)
+    /// with skews 0 (`.0`), and how it changes per unit skew (`.1`).
+    fn land(&self, e: f64) -> ([f64; 2], [f64; 2]) {
+        let [a_in, a_out, b_in, b_out] = self.drop;
+        (
+            [e * a_in - a_out / e, b_in / e - e * b_out],
+            [e * a_in + a_out / e, b_in / e + e * b_out],
+        )
+    }
+}
 
 /// The hold samples the covered-edge asymmetry is fitted from: piston at
-/// rest, spool inside the dead zone, pressures steady. Per sample the
-/// spool position and the skews each chamber's continuity calls for,
-/// (x_v, s_a, s_b).
+/// rest, spool inside the dead zone, pressures steady.
 pub struct EdgeHolds {
-    rows: Vec<(f64, f64, f64)>,
+    rows: Vec<HoldRow>,
     /// Time they cover, s.
     hold_s: f64,
 }
@@ -569,39 +601,93 @@ impl EdgeHolds {
                 if !(xv.abs() < covered && p2 - p5 > 5.0 * BAR) {
                     continue;
                 }
-                // At a hold the metering edges are covered: what continuity
-                // asks of them is the skewed part of the land leakage,
-                // k·s·(p2 − p5) per chamber.
-                let ps = flows.k_edge * (p2 - p5);
+                // At a hold the metering edges are covered: continuity asks
+                // the land leakage for all the flow (`metering` is net of
+                // the symmetric edges' share, added back).
+                let ps = p2 - p5;
+                let unit = flows.k_edge * ps;
                 let [q_a, q_b] = flows.metering([p2, p3, p4, p5], d.v[i], [0.0; 2]);
-                rows.push((xv, q_a / ps, q_b / ps));
+                rows.push(HoldRow {
+                    xv,
+                    drop: [
+                        (p2 - p3) / ps,
+                        (p3 - p5) / ps,
+                        (p2 - p4) / ps,
+                        (p4 - p5) / ps,
+                    ],
+                    need: [
+                        q_a / unit + (p2 + p5 - 2.0 * p3) / ps,
+                        q_b / unit + (p2 + p5 - 2.0 * p4) / ps,
+                    ],
+                });
             }
         }
         let hold_s = rows.len() as f64 * d.stride_s;
         Self { rows, hold_s }
     }
+
+    /// The skews of A and B that fit best at growth rate `g` (each a
+    /// least-squares line through the origin, held to ±[`MAX_SKEW`]),
+    /// and the RMS residual, in units of k·(p2 − p5).
+    fn skews_at(&self, g: f64) -> ([f64; 2], f64) {
+        let (mut num, mut den) = ([0.0; 2], [0.0; 2]);
+        for r in &self.rows {
+            let (base, per_skew) = r.land((g * r.xv).exp());
+            for c in 0..2 {
+                num[c] += (r.need[c] - base[c]) * per_skew[c];
+                den[c] += per_skew[c] * per_skew[c];
+            }
+        }
+        let skew =
+            [0, 1].map(|c| (num[c] / den[c].max(f64::MIN_POSITIVE)).clamp(-MAX_SKEW, MAX_SKEW));
+        let sum_sq = self
+            .rows
+            .iter()
+            .map(|r| {
+                let (base, per_skew) = r.land((g * r.xv).exp());
+                (0..2)
+                    .map(|c| (r.need[c] - base[c] - skew[c] * per_skew[c]).powi(2))
+                    .sum::<f64>()
+            })
+            .sum::<f64>();
+        (skew, (sum_sq / (2.0 * self.rows.len() as f64)).sqrt())
+    }
 }
 
-/// Fit the covered edges' asymmetry from the holds: with the piston at
-/// rest and the spool inside the dead zone, chamber continuity is the
-/// land leakage alone, and where each chamber's pressure settles says how
-/// its two edges divide the leakage (`valve.edge_leak_skew_a`, `_b`) and
-/// how that shifts with the spool (`valve.edge_leak_spool_gain`): with the
-/// symmetric edges of one coefficient the model can hold only one pressure
-/// pair, and the filter's laminar state (or a leak state) makes up the rest.
+/// How [`fit_edge_leak`] chooses the land leakage's growth rate
+/// (`valve.edge_leak_spool_gain`, e-folds per unit of spool travel).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Growth {
+    /// The rate the holds fit best: log-spaced candidates from 1 up to
+    /// what the model accepts (× dead zone ≤ [`MAX_LAND_EXPONENT`]). Needs
+    /// the spool to move in the holds.
+    Search,
+    /// This rate (held to what the model accepts).
+    Fixed(f64),
+}
+
+/// Fit the covered edges' land leakage from the holds: with the piston at
+/// rest and the spool inside the dead zone, chamber continuity is the land
+/// leakage alone, and where each chamber's pressure settles says how its
+/// two edges divide the leakage (`valve.edge_leak_skew_a`, `_b`) and how
+/// fast that shifts as the spool uncovers one of them
+/// (`valve.edge_leak_spool_gain`): with the symmetric edges of one
+/// coefficient the model can hold only one pressure pair, and the
+/// filter's laminar state (or a leak state) makes up the rest.
 ///
-/// With `spool` false the gain is left at 0. Returns the fit's line, or
-/// `None` (and, with `spool`, a warning) when the holds are too short.
+/// At each growth rate the skews are a linear least-squares fit. Returns
+/// the fit, or `None` when the holds are too short (with a warning, for
+/// [`Growth::Search`]), the spool too still to search the rate, or the
+/// fit sits at a bound (with a warning).
 pub fn fit_edge_leak(
     holds: &EdgeHolds,
     p: &mut Params,
-    spool: bool,
+    growth: Growth,
     warnings: &mut Vec<String>,
 ) -> Option<Fit> {
     let (rows, hold_s) = (&holds.rows, holds.hold_s);
-    let v = &p.valve;
     if hold_s < MIN_HOLD_S {
-        if spool {
+        if growth == Growth::Search {
             warnings.push(format!(
                 "covered valve edges kept symmetric: {hold_s:.2} s at rest with the spool inside the dead zone, need {MIN_HOLD_S} s"
             ));
@@ -609,45 +695,41 @@ pub fn fit_edge_leak(
         return None;
     }
     let m = rows.len() as f64;
-    let mean = |f: fn(&(f64, f64, f64)) -> f64| rows.iter().map(f).sum::<f64>() / m;
-    let (mx, ma, mb) = (mean(|r| r.0), mean(|r| r.1), mean(|r| r.2));
-    let sxx = rows.iter().map(|r| (r.0 - mx).powi(2)).sum::<f64>() / m;
-    // s_a = a + g·x, s_b = b − g·x: one slope from both chambers.
-    let mut g = 0.0;
-    if spool && sxx.sqrt() >= MIN_HOLD_SPOOL_SPREAD {
-        let sxy = rows
-            .iter()
-            .map(|r| (r.0 - mx) * ((r.1 - ma) - (r.2 - mb)))
-            .sum::<f64>()
-            / m;
-        g = (sxy / (2.0 * sxx)).clamp(0.0, 0.5 * MAX_SKEW / v.dead_zone);
-    }
-    if !spool && !(sxx.sqrt() >= MIN_HOLD_SPOOL_SPREAD) {
-        // Same as the fit with the spool gain: nothing new to try.
+    let mx = rows.iter().map(|r| r.xv).sum::<f64>() / m;
+    let spread = (rows.iter().map(|r| (r.xv - mx).powi(2)).sum::<f64>() / m).sqrt();
+    let top = (MAX_LAND_EXPONENT / p.valve.dead_zone).min(EDGE_LEAK_SPOOL_GAIN_MAX);
+    let (g, ([a, b], rms)) = match growth {
+        Growth::Fixed(g) => (g.min(top), holds.skews_at(g.min(top))),
+        Growth::Search if spread < MIN_HOLD_SPOOL_SPREAD => return None,
+        Growth::Search => (0..SPOOL_GAIN_CANDIDATES)
+            .map(|k| {
+                let g = top.powf(k as f64 / (SPOOL_GAIN_CANDIDATES - 1) as f64);
+                (g, holds.skews_at(g))
+            })
+            .min_by(|x, y| x.1 .1.total_cmp(&y.1 .1))?,
+    };
+    // A fit pressed against a bound is not determined by the holds (skew
+    // and growth trade off when the spool barely moves).
+    let searched_to_top = growth == Growth::Search && g >= top;
+    if a.abs() >= MAX_SKEW || b.abs() >= MAX_SKEW || searched_to_top {
+        warnings.push(format!(
+            "covered valve edges: the fit from the holds at growth {g:.0} e-folds per travel sits at a bound (skew A {a:+.2}, B {b:+.2}; limits ±{MAX_SKEW}, {top:.0} e-folds): not used"
+        ));
         return None;
     }
-    let room = MAX_SKEW - g * v.dead_zone;
-    let a = (ma - g * mx).clamp(-room, room);
-    let b = (mb + g * mx).clamp(-room, room);
-    let rms = (rows
-        .iter()
-        .map(|r| (r.1 - a - g * r.0).powi(2) + (r.2 - b + g * r.0).powi(2))
-        .sum::<f64>()
-        / (2.0 * m))
-        .sqrt();
     p.valve.edge_leak_skew_a = a;
     p.valve.edge_leak_skew_b = b;
     p.valve.edge_leak_spool_gain = g;
+    let folds = g * p.valve.dead_zone;
     Some(Fit {
         what: "covered valve edges (land leakage asymmetry)".into(),
         value: format!(
-            "skew A {a:+.3}, B {b:+.3} (P→A/A→T {:.2}, P→B/B→T {:.2}), spool gain {g:.1} per travel",
+            "skew A {a:+.3}, B {b:+.3} (P→A/A→T {:.2}, P→B/B→T {:.2}), growth {g:.1} e-folds per travel ({folds:.2} over the dead zone)",
             (1.0 + a) / (1.0 - a),
             (1.0 + b) / (1.0 - b)
         ),
         quality: format!(
-            "{hold_s:.1} s at rest, spool σ {:.4}, residual {rms:.3} of the edge leakage",
-            sxx.sqrt()
+            "{hold_s:.1} s at rest, spool σ {spread:.4}, residual {rms:.3} of the edge leakage"
         ),
     })
 }

@@ -222,3 +222,69 @@ fn a_kept_valve_has_its_null_moved_to_where_the_piston_holds() {
     ));
     assert_eq!(r.valve.null_offset, 0.0);
 }
+
+/// Hold rows of a valve whose covered edges follow the model's law with
+/// skews `a`, `b` and growth `g`: at each spool position the chambers sit
+/// at pressures where the land leakage of their two edges balances
+/// (supply 50 bar, tank 0).
+fn balanced_holds(a: f64, b: f64, g: f64) -> EdgeHolds {
+    let rows = (0..200)
+        .map(|k| {
+            let xv = 0.004 * ((k as f64 * 0.37).sin());
+            let e = (g * xv).exp();
+            // (1 + a)·e·(1 − f) = (1 − a)/e·f for A's fraction f of supply.
+            let fa = (1.0 + a) * e / ((1.0 + a) * e + (1.0 - a) / e);
+            let fb = (1.0 + b) / e / ((1.0 + b) / e + (1.0 - b) * e);
+            HoldRow {
+                xv,
+                drop: [1.0 - fa, fa, 1.0 - fb, fb],
+                need: [0.0, 0.0],
+            }
+        })
+        .collect();
+    EdgeHolds { rows, hold_s: 20.0 }
+}
+
+#[test]
+fn the_edge_fit_finds_the_skews_and_how_fast_the_leakage_grows_with_the_spool() {
+    let holds = balanced_holds(0.3, -0.2, 120.0);
+    let mut p = Params::nominal();
+    p.valve.dead_zone = 0.01;
+    let mut warnings = Vec::new();
+    let f = fit_edge_leak(&holds, &mut p, Growth::Search, &mut warnings);
+    assert!(f.is_some() && warnings.is_empty(), "{warnings:?}");
+    let v = &p.valve;
+    // The search's grid is 64 log-spaced rates: within one step of it.
+    assert!(
+        (v.edge_leak_spool_gain / 120.0 - 1.0).abs() < 0.06,
+        "{}",
+        v.edge_leak_spool_gain
+    );
+    assert!((v.edge_leak_skew_a - 0.3).abs() < 0.03, "{v:?}");
+    assert!((v.edge_leak_skew_b + 0.2).abs() < 0.03, "{v:?}");
+    // Fixed at the true rate the skews come out exact.
+    let mut q = Params::nominal();
+    q.valve.dead_zone = 0.01;
+    fit_edge_leak(&holds, &mut q, Growth::Fixed(120.0), &mut warnings).unwrap();
+    assert!((q.valve.edge_leak_skew_a - 0.3).abs() < 1e-9);
+    assert!((q.valve.edge_leak_skew_b + 0.2).abs() < 1e-9);
+    assert_eq!(q.valve.edge_leak_spool_gain, 120.0);
+}
+
+#[test]
+fn an_edge_fit_at_its_bound_is_not_used_and_says_so() {
+    // Edges far more lopsided than the fit may give: the skew saturates.
+    let holds = balanced_holds(0.97, 0.0, 0.0);
+    let mut p = Params::nominal();
+    let before = p.clone();
+    let mut warnings = Vec::new();
+    assert!(fit_edge_leak(&holds, &mut p, Growth::Fixed(0.0), &mut warnings).is_none());
+    assert_eq!(p, before);
+    assert!(warnings[0].contains("sits at a bound"), "{warnings:?}");
+    // A still spool cannot say how fast the leakage grows.
+    let mut still = balanced_holds(0.3, -0.2, 0.0);
+    for r in &mut still.rows {
+        r.xv = 0.001;
+    }
+    assert!(fit_edge_leak(&still, &mut p, Growth::Search, &mut warnings).is_none());
+}

@@ -27,14 +27,17 @@
 //! (eqs. 6.9–6.10, `fluid.rs`); valve spool dynamics (eq. 6.3); orifice
 //! flows through the four metering edges (eqs. 6.11–6.14, `valve.rs`);
 //! laminar leakage across the covered edges (eqs. 6.4–6.5) and the piston
-//! seal (eq. 6.8).
+//! seal (eq. 6.8). Beyond the thesis, each covered edge's land leakage
+//! grows exponentially as the spool uncovers it and a chamber's two edges
+//! may leak unequally ([`LandLeak`], calibrated): a real valve's pressure
+//! gain at null, which the thesis' constant leakage lacks.
 
 use crate::params::Params;
 use crate::physics::fluid::BulkModulusTable;
 pub use crate::physics::friction::stribeck_decay;
 use crate::physics::load::LoadTable;
 pub use crate::physics::units::{BAR, LEAK_UNIT, LPM_PER_M3S};
-use crate::physics::valve::{opening, orifice, spool_at, SpoolStep, OPENING_ROUNDING};
+use crate::physics::valve::{land_growth, opening, orifice, spool_at, SpoolStep, OPENING_ROUNDING};
 use crate::real::Real;
 
 mod jacobian;
@@ -76,6 +79,26 @@ pub struct Inputs<T> {
     /// Temperature factor on laminar leakage, ν(T_ref)/ν(T) (1 at the
     /// reference temperature).
     pub laminar_factor: T,
+    /// The covered edges' land leakage at this command
+    /// ([`Plant::land_leak`]).
+    pub land: LandLeak<T>,
+}
+
+/// Each covered metering edge's land leakage relative to
+/// `valve.edge_leak_lpm_per_bar`, at one spool position: a laminar
+/// conductance that grows e-fold per 1/`edge_leak_spool_gain` of travel
+/// uncovering the edge, and is split unevenly between a chamber's two
+/// edges by its skew. Positive travel uncovers P→A and B→T.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LandLeak<T> {
+    /// P→A.
+    pub pa: T,
+    /// A→T.
+    pub at: T,
+    /// P→B.
+    pub pb: T,
+    /// B→T.
+    pub bt: T,
 }
 
 /// Valve uncertainty estimated online by every filter: the metering flow
@@ -138,9 +161,11 @@ pub struct Plant<T> {
     null_offset: T,
     open_eps: T,
     k_edge: T,
-    k_skew_a: T,
-    k_skew_b: T,
-    k_skew_spool: T,
+    /// Each edge's share of the land leakage with the spool centred:
+    /// P→A 1 + s_a, A→T 1 − s_a, P→B 1 + s_b, B→T 1 − s_b.
+    land_centred: LandLeak<T>,
+    /// Exponent of the land leakage's growth per unit spool travel, 1/λ.
+    land_gain: T,
     k_seal: T,
     lam_dp: T,
     sqrt_lam_dp: T,
@@ -180,9 +205,13 @@ impl<T: Real> Plant<T> {
             null_offset: T::c(v.null_offset),
             open_eps: T::c(OPENING_ROUNDING),
             k_edge: T::c(lam(v.edge_leak_lpm_per_bar)),
-            k_skew_a: T::c(lam(v.edge_leak_lpm_per_bar) * v.edge_leak_skew_a),
-            k_skew_b: T::c(lam(v.edge_leak_lpm_per_bar) * v.edge_leak_skew_b),
-            k_skew_spool: T::c(lam(v.edge_leak_lpm_per_bar) * v.edge_leak_spool_gain),
+            land_centred: LandLeak {
+                pa: T::c(1.0 + v.edge_leak_skew_a),
+                at: T::c(1.0 - v.edge_leak_skew_a),
+                pb: T::c(1.0 + v.edge_leak_skew_b),
+                bt: T::c(1.0 - v.edge_leak_skew_b),
+            },
+            land_gain: T::c(v.edge_leak_spool_gain),
             k_seal: T::c(lam(params.leakage.seal_lpm_per_bar)),
             lam_dp: T::c(v.laminar_dp_bar * BAR),
             sqrt_lam_dp: T::c((v.laminar_dp_bar * BAR).sqrt()),
@@ -205,6 +234,26 @@ impl<T: Real> Plant<T> {
     #[inline]
     pub fn spool_command(&self, u_valve: T) -> T {
         spool_at(u_valve, self.null_offset)
+    }
+
+    /// The covered edges' land leakage at valve command `u_valve`: the
+    /// spool taken where the command puts it (it follows within a few
+    /// milliseconds), held to the dead zone. Evaluated once per sample for
+    /// every filter of the bank.
+    #[inline]
+    pub fn land_leak(&self, u_valve: T) -> LandLeak<T> {
+        let x = self
+            .spool_command(u_valve)
+            .clamp_to(-self.dead_zone, self.dead_zone);
+        let grow = land_growth(self.land_gain * x);
+        let shrink = T::ONE / grow;
+        let c = &self.land_centred;
+        LandLeak {
+            pa: c.pa * grow,
+            at: c.at * shrink,
+            pb: c.pb * shrink,
+            bt: c.bt * grow,
+        }
     }
 
     /// Friction force (N) and its slope dF/dv (N·s/m) at velocity `v` (m/s).
@@ -294,17 +343,12 @@ impl<T: Real> Plant<T> {
         let ext_b = -(kv_ext_b * a_pos * g_bt);
         let ret_a = -(kv_ret * a_neg * g_at);
         let ret_b = kv_ret_b * a_neg * g_pb;
-        // Covered-edge asymmetry: P→A = k·(1 + s_a), A→T = k·(1 − s_a) (B
-        // alike), s_a = skew_a + g·x_v and s_b = skew_b − g·x_v with the
-        // spool held to the dead zone (calibrated; 0: symmetric edges).
-        let in_dz = xv.abs() < self.dead_zone;
-        let xv_dz = xv.clamp_to(-self.dead_zone, self.dead_zone);
-        let lam_ps = laminar * (p2 - p5);
-        let spool_skew = self.k_skew_spool * xv_dz;
-        let skew_a = (self.k_skew_a + spool_skew) * lam_ps;
-        let skew_b = (self.k_skew_b - spool_skew) * lam_ps;
-        let q_a = ext_a + ret_a + k_edge * (p2 + p5 - p3 - p3) + skew_a;
-        let q_b = ext_b + ret_b + k_edge * (p2 + p5 - p4 - p4) + skew_b;
+        // Land leakage of the covered edges, per edge at this command.
+        let land = &u.land;
+        let land_a = k_edge * (land.pa * (p2 - p3) - land.at * (p3 - p5));
+        let land_b = k_edge * (land.pb * (p2 - p4) - land.bt * (p4 - p5));
+        let q_a = ext_a + ret_a + land_a;
+        let q_b = ext_b + ret_b + land_b;
 
         // --- Leaks: healthy seal leakage plus the hypothesised leaks.
         let leak_unit = T::c(LEAK_UNIT);
@@ -340,19 +384,17 @@ impl<T: Real> Plant<T> {
         let dp3 = ca * flow_a;
         let dp4 = cb * flow_b;
 
-        let dskew_dxv = if in_dz {
-            self.k_skew_spool * lam_ps
-        } else {
-            T::ZERO
-        };
-        let dqa_dxv = kv_ext * da_pos * g_pa + kv_ret * da_neg * g_at + dskew_dxv;
-        let dqb_dxv = -(kv_ret_b * da_neg * g_pb) - kv_ext_b * da_pos * g_bt - dskew_dxv;
-        let dqa_dp3 = -(kv_ext * a_pos * dg_pa) - kv_ret * a_neg * dg_at - k_edge - k_edge;
-        let dqb_dp4 = -(kv_ret_b * a_neg * dg_pb) - kv_ext_b * a_pos * dg_bt - k_edge - k_edge;
+        // (The land leakage follows the command, an input: no x_v term.)
+        let dqa_dxv = kv_ext * da_pos * g_pa + kv_ret * da_neg * g_at;
+        let dqb_dxv = -(kv_ret_b * da_neg * g_pb) - kv_ext_b * da_pos * g_bt;
+        let dqa_dp3 =
+            -(kv_ext * a_pos * dg_pa) - kv_ret * a_neg * dg_at - k_edge * (land.pa + land.at);
+        let dqb_dp4 =
+            -(kv_ret_b * a_neg * dg_pb) - kv_ext_b * a_pos * dg_bt - k_edge * (land.pb + land.bt);
         // Laminar factor: d(healthy leakage)/d(state).
         let dlam = u.laminar_factor * T::c(LAMINAR_REF) / laminar;
-        let lam_a = k_edge * (p2 + p5 - p3 - p3) + skew_a - k_seal * dp_int;
-        let lam_b = k_edge * (p2 + p5 - p4 - p4) + skew_b + k_seal * dp_int;
+        let lam_a = land_a - k_seal * dp_int;
+        let lam_b = land_b + k_seal * dp_int;
         // Gains: each direction's metering flows scale with its gain.
         let dge = self.kv_ext * gref / kv_ext;
         let dgr = self.kv_ret * gref / kv_ret;

@@ -56,12 +56,13 @@ fn plant_all_terms() -> Plant<f64> {
     Plant::new(&p)
 }
 
-fn inputs(u: f64) -> Inputs<f64> {
+fn inputs(p: &Plant<f64>, u: f64) -> Inputs<f64> {
     Inputs {
         p_supply_pa: 50.0 * BAR,
         p_tank_pa: 0.8 * BAR,
         u_valve: u,
         laminar_factor: 1.0,
+        land: p.land_leak(u),
     }
 }
 
@@ -138,12 +139,12 @@ fn analytic_jacobian_matches_finite_differences() {
         laminar: 0.4,
     };
     let cases = [
-        (state(0.05, 0.02, 0.2, 30.0, 12.0), inputs(0.2)),
-        (state(0.12, -0.03, -0.15, 14.0, 22.0), inputs(-0.15)),
-        (state(0.09, 0.0, 0.005, 21.0, 13.0), inputs(0.0)), // dead zone, at rest
-        (state(0.03, 1e-4, 0.0162, 25.0, 10.0), inputs(0.0162)), // rounded edge
-        (state(0.10, 0.01, 0.3, 49.6, 1.2), inputs(0.3)),   // laminar orifice region
-        (state(0.07, -0.2, -0.6, 3.0, 45.0), inputs(-0.6)), // low pressure, soft oil
+        (state(0.05, 0.02, 0.2, 30.0, 12.0), inputs(&p, 0.2)),
+        (state(0.12, -0.03, -0.15, 14.0, 22.0), inputs(&p, -0.15)),
+        (state(0.09, 0.0, 0.005, 21.0, 13.0), inputs(&p, 0.0)), // dead zone, at rest
+        (state(0.03, 1e-4, 0.0162, 25.0, 10.0), inputs(&p, 0.0162)), // rounded edge
+        (state(0.10, 0.01, 0.3, 49.6, 1.2), inputs(&p, 0.3)),   // laminar orifice region
+        (state(0.07, -0.2, -0.6, 3.0, 45.0), inputs(&p, -0.6)), // low pressure, soft oil
     ];
     for (n, (s, u)) in cases.iter().enumerate() {
         let e = p.eval(s, u, nuis, leaks);
@@ -169,7 +170,7 @@ fn balanced_at_rest_in_the_dead_zone() {
     // With the spool centred and the piston held, each chamber relaxes to
     // the pressure where the covered-edge leakages balance.
     let p = plant();
-    let u = inputs(0.0);
+    let u = inputs(&p, 0.0);
     let mut s = state(0.09, 0.0, 0.0, 25.4, 25.4);
     s[VV] = 0.0;
     let e = p.eval(&s, &u, Nuisance::default(), Leaks::default());
@@ -178,9 +179,61 @@ fn balanced_at_rest_in_the_dead_zone() {
 }
 
 #[test]
+fn land_leakage_grows_exponentially_as_the_spool_uncovers_an_edge() {
+    let mut params = Params::nominal();
+    params.valve.edge_leak_skew_a = 0.2;
+    params.valve.edge_leak_spool_gain = 100.0;
+    let p = Plant::<f64>::new(&params);
+    let dz = params.valve.dead_zone;
+    let null = params.valve.null_offset;
+    // Centred spool: the skew alone.
+    let c = p.land_leak(-null);
+    assert!((c.pa - 1.2).abs() < 1e-12 && (c.at - 0.8).abs() < 1e-12);
+    assert!((c.pb - 1.0).abs() < 1e-12 && (c.bt - 1.0).abs() < 1e-12);
+    // Half the dead zone towards extending: P→A and B→T grow e^(g·x),
+    // the others shrink as much.
+    let x = 0.5 * dz;
+    let l = p.land_leak(x - null);
+    let e = (100.0 * x).exp();
+    assert!((l.pa / (1.2 * e) - 1.0).abs() < 4e-4, "{l:?}");
+    assert!((l.bt / e - 1.0).abs() < 4e-4 && (l.pb * e - 1.0).abs() < 4e-4);
+    assert!((l.at * e / 0.8 - 1.0).abs() < 4e-4);
+    // Held at the dead zone once the edge opens.
+    assert_eq!(p.land_leak(0.5), p.land_leak(dz - null));
+    // At rest chamber A settles where its edges balance: higher the
+    // further P→A is uncovered.
+    let settle = |u: f64| {
+        let inputs = inputs(&p, u);
+        let (mut lo, mut hi) = (1.0, 49.0);
+        for _ in 0..60 {
+            let mid = 0.5 * (lo + hi);
+            let f = p
+                .eval(
+                    &state(0.09, 0.0, u + null, mid, 20.0),
+                    &inputs,
+                    Nuisance::default(),
+                    Leaks::default(),
+                )
+                .f[P3];
+            if f > 0.0 {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        lo
+    };
+    let (below, centred, above) = (settle(-x - null), settle(-null), settle(x - null));
+    assert!(
+        below < centred && centred < above,
+        "{below} {centred} {above}"
+    );
+}
+
+#[test]
 fn leaks_drain_the_right_chambers() {
     let p = plant();
-    let u = inputs(0.0);
+    let u = inputs(&p, 0.0);
     let s = state(0.09, 0.0, 0.0, 21.0, 13.0);
     let base = p.eval(&s, &u, Nuisance::default(), Leaks::default());
     let int = p.eval(
@@ -255,10 +308,10 @@ fn one_ms_prediction_is_stable_and_accurate_for_the_stiff_model() {
         external: 0.2,
     };
     let cases = [
-        (state(0.002, 0.0, 0.8, 49.7, 0.9), inputs(0.8)),
-        (state(0.178, 0.0, -0.8, 1.0, 49.5), inputs(-0.8)),
-        (state(0.09, 0.03, 0.25, 35.0, 9.0), inputs(0.25)),
-        (state(0.09, 0.0, 0.0, 21.0, 13.0), inputs(0.0)),
+        (state(0.002, 0.0, 0.8, 49.7, 0.9), inputs(&p, 0.8)),
+        (state(0.178, 0.0, -0.8, 1.0, 49.5), inputs(&p, -0.8)),
+        (state(0.09, 0.03, 0.25, 35.0, 9.0), inputs(&p, 0.25)),
+        (state(0.09, 0.0, 0.0, 21.0, 13.0), inputs(&p, 0.0)),
     ];
     let dt = 0.001;
     for (n, (s0, u)) in cases.iter().enumerate() {
@@ -314,7 +367,7 @@ fn one_ms_prediction_is_stable_and_accurate_for_the_stiff_model() {
     // and rings far from the settled pressure (p3 → p2 = 50 bar).
     let mut blocked = state(0.09, 0.0, 0.8, 49.8, 1.0);
     blocked[VV] = 0.0;
-    let u = inputs(0.8);
+    let u = inputs(&p, 0.8);
     let mut e = blocked;
     for _ in 0..10 {
         let f = p.eval(&e, &u, Nuisance::default(), Leaks::default()).f;
