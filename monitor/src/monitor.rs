@@ -274,13 +274,14 @@ impl<T: Real> Monitor<T> {
         let region = operating_region(c.u_valve, self.cfg.hold_band);
         let pinned = quiet::pinned(&c, region);
         let no_evidence = suspect || pinned;
+        let u_valve = T::from_f32(held.u_valve);
         let ctx = StepContext {
             inputs: Inputs {
                 p_supply_pa: T::from_f32(held.p_supply_bar) * T::c(BAR),
                 p_tank_pa: T::from_f32(held.p_tank_bar) * T::c(BAR),
-                u_valve: T::from_f32(held.u_valve),
+                u_valve,
                 laminar_factor: self.laminar_factor,
-                land: self.plant.land_leak(T::from_f32(held.u_valve)),
+                land: self.plant.land_leak(u_valve),
             },
             step: Step {
                 dt: T::c(dt),

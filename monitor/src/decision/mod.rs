@@ -18,9 +18,9 @@
 //!    ([`Decision::conclusive`]), never `healthy`. Raised leaks go to the
 //!    one leak-alarm latch ([`latch`]): they stay until acknowledged,
 //!    and a new leak while one is latched escalates (internal + external
-//!    = both); with one leak raised, the
-//!    other must also read more than [`CROSS_TALK`] × its flow (the
-//!    model's error shares flow between the two). The alarm level is the
+//!    = both); with one leak raised, the other must also read more than
+//!    [`CROSS_TALK`] × its flow (the model's error shares flow between
+//!    the two). The alarm level is the
 //!    user's, raised to the installation's floor in the current operating
 //!    region; entering a region with a lower level it falls with
 //!    [`LEVEL_RELEASE_S`] (the leak states still carry the last region's
