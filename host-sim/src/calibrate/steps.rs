@@ -7,7 +7,6 @@ use super::{
     MAX_FORCE_EXCESS_N, MAX_VALVE_RESIDUAL, MIN_REGION_EVIDENCE_S, MIN_VALVE_R2, REGIONS,
 };
 use monitor::physics::units::{LEAK_UNIT, LPM_PER_M3S};
-use monitor::physics::valve::MAX_LAND_EXPONENT;
 use monitor::{Params, Sample};
 
 /// One run of fit steps 1–5 on (part of) a recording.
@@ -221,11 +220,11 @@ pub(super) fn fit_plant(
         let mut q = p.clone();
         q.valve.edge_leak_skew_a = 0.0;
         q.valve.edge_leak_skew_b = 0.0;
-        q.valve.edge_leak_spool_gain = growth.min(MAX_LAND_EXPONENT / q.valve.dead_zone);
+        q.valve.edge_leak_spool_gain = growth.min(fit::growth_limit(&q.valve));
         q
     };
     let growing = Fit {
-        what: "covered valve edges (land leakage asymmetry)".into(),
+        what: fit::EDGE_FIT.into(),
         value: format!(
             "symmetric, growth {LAND_GROWTH_PRIOR:.0} e-folds per travel (a typical servo valve's)"
         ),

@@ -541,9 +541,18 @@ pub const MIN_HOLD_S: f64 = 0.5;
 const MIN_HOLD_SPOOL_SPREAD: f64 = 5e-4;
 /// Largest edge asymmetry |skew| the fit may give.
 const MAX_SKEW: f64 = 0.9;
-/// Largest growth rate of the land leakage, e-folds per unit of spool
-/// travel (`valve.edge_leak_spool_gain`'s range).
-const EDGE_LEAK_SPOOL_GAIN_MAX: f64 = 200.0;
+/// What the covered-edge fit is called in the report.
+pub const EDGE_FIT: &str = "covered valve edges (land leakage asymmetry)";
+
+/// Largest growth rate of the land leakage the model accepts for `valve`,
+/// e-folds per unit of spool travel: `valve.edge_leak_spool_gain`'s range,
+/// and × dead zone ≤ [`MAX_LAND_EXPONENT`] (validated).
+pub fn growth_limit(valve: &monitor::params::Valve) -> f64 {
+    let range = Params::bounds_of("valve.edge_leak_spool_gain")
+        .expect("a parameter field")
+        .range(0);
+    (MAX_LAND_EXPONENT / valve.dead_zone).min(range.max)
+}
 /// Candidate growth rates of the land leakage (e-folds per unit of spool
 /// travel) the fit tries between 1 and its largest, log-spaced.
 const SPOOL_GAIN_CANDIDATES: usize = 64;
@@ -630,9 +639,10 @@ impl EdgeHolds {
     /// least-squares line through the origin, held to ±[`MAX_SKEW`]),
     /// and the RMS residual, in units of k·(p2 − p5).
     fn skews_at(&self, g: f64) -> ([f64; 2], f64) {
+        // Each row's land flows at this growth, for the fit and its residual.
+        let land: Vec<_> = self.rows.iter().map(|r| r.land((g * r.xv).exp())).collect();
         let (mut num, mut den) = ([0.0; 2], [0.0; 2]);
-        for r in &self.rows {
-            let (base, per_skew) = r.land((g * r.xv).exp());
+        for (r, (base, per_skew)) in self.rows.iter().zip(&land) {
             for c in 0..2 {
                 num[c] += (r.need[c] - base[c]) * per_skew[c];
                 den[c] += per_skew[c] * per_skew[c];
@@ -643,8 +653,8 @@ impl EdgeHolds {
         let sum_sq = self
             .rows
             .iter()
-            .map(|r| {
-                let (base, per_skew) = r.land((g * r.xv).exp());
+            .zip(&land)
+            .map(|(r, (base, per_skew))| {
                 (0..2)
                     .map(|c| (r.need[c] - base[c] - skew[c] * per_skew[c]).powi(2))
                     .sum::<f64>()
@@ -659,8 +669,8 @@ impl EdgeHolds {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Growth {
     /// The rate the holds fit best: log-spaced candidates from 1 up to
-    /// what the model accepts (× dead zone ≤ [`MAX_LAND_EXPONENT`]). Needs
-    /// the spool to move in the holds.
+    /// what the model accepts ([`growth_limit`]). Needs the spool to move
+    /// in the holds.
     Search,
     /// This rate (held to what the model accepts).
     Fixed(f64),
@@ -697,7 +707,7 @@ pub fn fit_edge_leak(
     let m = rows.len() as f64;
     let mx = rows.iter().map(|r| r.xv).sum::<f64>() / m;
     let spread = (rows.iter().map(|r| (r.xv - mx).powi(2)).sum::<f64>() / m).sqrt();
-    let top = (MAX_LAND_EXPONENT / p.valve.dead_zone).min(EDGE_LEAK_SPOOL_GAIN_MAX);
+    let top = growth_limit(&p.valve);
     let (g, ([a, b], rms)) = match growth {
         Growth::Fixed(g) => (g.min(top), holds.skews_at(g.min(top))),
         Growth::Search if spread < MIN_HOLD_SPOOL_SPREAD => return None,
@@ -722,7 +732,7 @@ pub fn fit_edge_leak(
     p.valve.edge_leak_spool_gain = g;
     let folds = g * p.valve.dead_zone;
     Some(Fit {
-        what: "covered valve edges (land leakage asymmetry)".into(),
+        what: EDGE_FIT.into(),
         value: format!(
             "skew A {a:+.3}, B {b:+.3} (P→A/A→T {:.2}, P→B/B→T {:.2}), growth {g:.1} e-folds per travel ({folds:.2} over the dead zone)",
             (1.0 + a) / (1.0 - a),
