@@ -275,9 +275,9 @@ fn noise_is_estimated_and_leak_flows_are_never_negative() {
     assert!((0.25..0.5).contains(&sigma), "piston chamber σ {sigma} bar");
 }
 
-/// The development run `id` of the full matrix's plan and a monitor with
-/// its cell's calibration, as `eval` runs it.
-fn development_run(id: &str) -> (Vec<plant::Row>, Monitor<f32>) {
+/// The development run `id` of the full matrix's plan, a monitor with its
+/// cell's calibration, as `eval` runs it, and that calibration.
+fn development_run(id: &str) -> (Vec<plant::Row>, Monitor<f32>, Calibration) {
     let plan = plan(&PlanConfig::default());
     let spec = plan
         .specs()
@@ -286,7 +286,8 @@ fn development_run(id: &str) -> (Vec<plant::Row>, Monitor<f32>) {
     let c = &spec.cell;
     let cal = calibrated(c.rig, c.supply_bar, c.temp_c);
     let rows = plant::simulate(&spec.run());
-    (rows, Monitor::<f32>::new(&cal.params).unwrap())
+    let monitor = Monitor::<f32>::new(&cal.params).unwrap();
+    (rows, monitor, cal)
 }
 
 /// Development rig `rig` at `supply_bar`, `temp_c` calibrated from the
@@ -436,7 +437,7 @@ fn at_an_end_stop_with_the_valve_open_the_move_is_not_taken_for_a_leak() {
     // then the piston sits at the end stop with the valve open, where the
     // leaks cannot be seen. Counted as evidence, the state's slow decay
     // there raised a false `external` alarm.
-    let (rows, mut m) = development_run("dev/rig4/50bar/40C/healthy-step");
+    let (rows, mut m, _) = development_run("dev/rig4/50bar/40C/healthy-step");
     // The detection reading and the reported size at the stop.
     let mut at_stop = Vec::new();
     let mut alarms = Vec::new();
@@ -472,10 +473,9 @@ fn an_internal_leak_the_loop_feeds_through_the_covered_edges_is_isolated() {
     // how fast the leakage grows from the holds (the healthy readings drop
     // from 2.4 l/min with symmetric edges to 0.05), and the leak is
     // isolated (at 34.9 s in the eval).
-    let cal = calibrated(5, 100.0, 40.0);
+    let (rows, mut m, cal) = development_run("dev/rig5/100bar/40C/internal-0.20-on30");
     let v = &cal.params.valve;
     assert!(v.edge_leak_spool_gain > 10.0, "{v:?} {:?}", cal.warnings);
-    let (rows, mut m) = development_run("dev/rig5/100bar/40C/internal-0.20-on30");
     let mut first = None;
     for row in &rows {
         let s = m.step(&row_sample(row));
@@ -497,7 +497,7 @@ fn a_leak_reading_the_model_probabilities_contradict_is_never_healthy() {
     // their complexity penalty), so no alarm may be raised. Nor may the
     // verdict stay `healthy` once that reading has stood above the alarm
     // level for the debounce time: it used to end `healthy`.
-    let (rows, mut m) = development_run("dev/rig2/50bar/25C/step-internal-1.00");
+    let (rows, mut m, _) = development_run("dev/rig2/50bar/25C/step-internal-1.00");
     let mut contradicted = false;
     let mut last = None;
     for row in &rows {
