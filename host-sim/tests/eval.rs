@@ -5,7 +5,7 @@ use host_sim::eval::exec::{self, Alarm, TruthSummary};
 use host_sim::eval::report::{self, Target};
 use host_sim::eval::{
     self, plan, Category, Cell, ExecConfig, FaultKind, PlanConfig, RigSet, RunResult, RunSpec,
-    DEV_RIGS, HOLDOUT_RIGS, WIDE_RIGS,
+    DEV_RIGS, HOLDOUT_RIGS, SURVEY_RIGS, WIDE_RIGS,
 };
 use monitor::Params;
 use std::time::Instant;
@@ -368,9 +368,14 @@ fn holdout_rigs_never_appear_in_a_dev_run() {
     for &h in &HOLDOUT_RIGS {
         assert!(!DEV_RIGS.contains(&h));
         assert!(!WIDE_RIGS.contains(&h));
+        assert!(!SURVEY_RIGS.contains(&h));
     }
     for &w in &WIDE_RIGS {
         assert!(!DEV_RIGS.contains(&w));
+        assert!(!SURVEY_RIGS.contains(&w));
+    }
+    for &s in &SURVEY_RIGS {
+        assert!(!DEV_RIGS.contains(&s));
     }
     // The further development rigs: their own set, one cell each with
     // `--quick`, never a held-out seed.

@@ -46,6 +46,19 @@ pub const WIDE_RIGS: [u64; 24] = [
     7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 28, 29, 30,
 ];
 
+/// Survey rigs: a larger sample of the same population (seeds 31–78),
+/// to look for rare failures with `--quick` (tuned on like the other
+/// development rigs; reported separately). Disjoint from the other sets.
+pub const SURVEY_RIGS: [u64; 48] = {
+    let mut seeds = [0; 48];
+    let mut i = 0;
+    while i < seeds.len() {
+        seeds[i] = 31 + i as u64;
+        i += 1;
+    }
+    seeds
+};
+
 /// A set of rigs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -56,6 +69,8 @@ pub enum RigSet {
     Holdout,
     /// [`WIDE_RIGS`].
     Wide,
+    /// [`SURVEY_RIGS`].
+    Survey,
 }
 
 impl RigSet {
@@ -65,6 +80,7 @@ impl RigSet {
             Self::Dev => &DEV_RIGS,
             Self::Holdout => &HOLDOUT_RIGS,
             Self::Wide => &WIDE_RIGS,
+            Self::Survey => &SURVEY_RIGS,
         }
     }
 
@@ -74,6 +90,7 @@ impl RigSet {
             Self::Dev => "dev",
             Self::Holdout => "holdout",
             Self::Wide => "wide",
+            Self::Survey => "survey",
         }
     }
 }
@@ -89,6 +106,9 @@ pub enum SetChoice {
     Both,
     /// Further development rigs (seeds 7–30), to find failures on.
     Wide,
+    /// A larger sample of development rigs (seeds 31–78), for rare
+    /// failures (use with `--quick`).
+    Survey,
 }
 
 impl SetChoice {
@@ -99,6 +119,7 @@ impl SetChoice {
             Self::Holdout => vec![RigSet::Holdout],
             Self::Both => vec![RigSet::Dev, RigSet::Holdout],
             Self::Wide => vec![RigSet::Wide],
+            Self::Survey => vec![RigSet::Survey],
         }
     }
 }

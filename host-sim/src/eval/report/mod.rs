@@ -115,7 +115,7 @@ pub fn markdown(ev: &Evaluation) -> String {
             "**calibration off**: every cell uses the start parameters"
         },
     );
-    for set in [RigSet::Dev, RigSet::Wide, RigSet::Holdout] {
+    for set in [RigSet::Dev, RigSet::Wide, RigSet::Survey, RigSet::Holdout] {
         let cells: Vec<&CellResult> = ev.cells.iter().filter(|c| c.cell.set == set).collect();
         if cells.is_empty() {
             continue;
@@ -135,6 +135,7 @@ fn set_report(out: &mut String, set: RigSet, cells: &[&CellResult], runs: &[&Run
         RigSet::Dev => "Development rigs",
         RigSet::Holdout => "Held-out rigs",
         RigSet::Wide => "Further development rigs",
+        RigSet::Survey => "Survey development rigs",
     };
     let _ = writeln!(
         out,
