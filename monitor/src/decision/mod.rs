@@ -331,6 +331,16 @@ impl<T: Real> Decision<T> {
             && self.reset_hold_s <= T::ZERO
             && !self.mismatch
             && !self.provisional
+            && !self.pending()
+    }
+
+    /// Is a leak reading pending: has its lower bound stood above the
+    /// alarm level recently enough that its CUSUM has not run back to 0?
+    /// The alarm waits for persistence; `healthy` must not claim what it
+    /// is waiting on (a step test that ends with the piston at a stop
+    /// can hold such a reading with almost no evidence weight left).
+    fn pending(&self) -> bool {
+        Leak::ALL.iter().any(|&k| self.persist[k] > T::ZERO)
     }
 
     /// An operator's acknowledgement at `t_ms` (sample time): the latch
@@ -768,6 +778,42 @@ mod tests {
         // capped CUSUM's two debounce times once the detection average
         // (0.25 s) has fallen below the level.
         run(&mut d, 0.0, 2.0 * p.alarm.debounce_s + 1.0);
+        assert!(d.conclusive());
+        assert!(d.latched().is_empty());
+    }
+
+    #[test]
+    fn a_reading_above_the_alarm_level_that_is_not_yet_an_alarm_is_never_healthy() {
+        let p = Params::nominal();
+        let mut d: Decision<f64> = Decision::new(&p);
+        let mut events = Events::new();
+        let mut t = 0.0;
+        // (reading l/min, evidence weight, the plant shows the leaks, s)
+        let mut run =
+            |d: &mut Decision<f64>, lpm: f64, weight: f64, observable: bool, secs: f64| {
+                for _ in 0..(secs * 1000.0).round() as usize {
+                    t += 0.001;
+                    let f = SampleFacts {
+                        observable,
+                        ..facts(0.001, weight, true, 1, t)
+                    };
+                    d.update(&outputs(lpm), f, &mut events);
+                }
+            };
+        run(&mut d, 0.0, 1.0, true, 5.0);
+        assert!(d.conclusive());
+        // A step test: a short move reads three times the alarm level, then
+        // the piston sits at a stop with the valve open (the reading keeps
+        // its value, almost no evidence weight). The alarm still waits on
+        // persistence: not a leak yet, and not `healthy` either.
+        run(&mut d, 3.0 * p.alarm.alarm_lpm, 1.0, true, 0.2);
+        run(&mut d, 3.0 * p.alarm.alarm_lpm, 0.01, false, 3.0);
+        assert!(d.latched().is_empty());
+        assert!(d.pending());
+        assert!(!d.conclusive());
+        // The reading goes back to nothing: healthy again once the CUSUM
+        // has run back to 0.
+        run(&mut d, 0.0, 1.0, true, 1.0);
         assert!(d.conclusive());
         assert!(d.latched().is_empty());
     }
