@@ -489,6 +489,22 @@ fn an_internal_leak_the_loop_feeds_through_the_covered_edges_is_isolated() {
 }
 
 #[test]
+fn a_step_test_whose_leak_the_alarm_still_waits_on_is_never_healthy() {
+    // Development rig 5 at 50 bar, 25 °C, a 10 s step test with a
+    // 1 l/min external leak from the start: the one move reads 0.88 l/min
+    // against a 0.08 l/min level, then the piston sits at its stop with
+    // the valve open, where a sample weighs almost nothing as evidence, and
+    // the alarm's CUSUM never reaches its debounce time. The run ended
+    // `healthy` while the alarm was still waiting; now it is
+    // `inconclusive`.
+    let (rows, mut m, _) = development_run("dev/rig5/50bar/25C/step-external-1.00");
+    let st: Vec<Status> = rows.iter().map(|r| m.step(&row_sample(r))).collect();
+    assert!(alarms(&st).is_empty(), "{:?}", alarms(&st));
+    let last = st.last().unwrap();
+    assert_eq!(last.verdict, Verdict::Inconclusive, "at {} s", last.t_s);
+}
+
+#[test]
 fn a_leak_reading_the_model_probabilities_contradict_is_never_healthy() {
     // Development rig 2 at 50 bar, 25 °C, its step test with a 1 l/min
     // internal leak: in the hold before the step the `both` filter reads
