@@ -30,6 +30,8 @@
 #   holdout     host-sim eval --set holdout --quick              → docs/evaluation.md (~5 min)
 #   wide        host-sim eval --set wide --quick (24 further
 #               development rigs)                                → docs/evaluation.md (~6 min; 2 from the cache)
+#   survey      host-sim eval --set survey --quick (48 survey
+#               development rigs)                                → docs/evaluation.md (~20 min; 3 from the cache)
 #   dev-full    host-sim eval --set dev (full matrix, 522 runs)  → docs/evaluation.md (~15 min or more)
 # A block that has never been regenerated says so and names the commit its
 # figures were measured at; running its producer replaces that note.
@@ -260,10 +262,11 @@ for p in "${producers[@]}"; do
     eval) eval_block dev-quick --set dev --quick ;;
     holdout) eval_block holdout-quick --set holdout --quick ;;
     wide) eval_block wide-quick --set wide --quick ;;
+    survey) eval_block survey-quick --set survey --quick ;;
     dev-full) eval_block dev-full --set dev ;;
     size) fig_size ;;
     bench) fig_bench ;;
-    *) echo "unknown producer: $p (examples golden throughput eval size bench holdout wide dev-full)"; exit 2 ;;
+    *) echo "unknown producer: $p (examples golden throughput eval size bench holdout wide survey dev-full)"; exit 2 ;;
   esac
 done
 step "done: review with git diff README.md docs/"
