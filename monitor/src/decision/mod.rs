@@ -717,6 +717,41 @@ mod tests {
         })
     }
 
+    /// Feeds a decision 1 ms samples on one sample clock.
+    struct Feed {
+        t: f64,
+        events: Events,
+    }
+
+    impl Feed {
+        fn new() -> Self {
+            Self {
+                t: 0.0,
+                events: Events::new(),
+            }
+        }
+
+        /// `secs` of the filter outputs `out`, with the facts `at` gives
+        /// for each sample time.
+        fn run(
+            &mut self,
+            d: &mut Decision<f64>,
+            out: &[Option<FilterOutput<f64>>; 4],
+            secs: f64,
+            at: impl Fn(f64) -> SampleFacts<f64>,
+        ) {
+            for _ in 0..(secs * 1000.0).round() as usize {
+                self.t += 0.001;
+                d.update(out, at(self.t), &mut self.events);
+            }
+        }
+    }
+
+    /// A quasi-steady (weight 1), valid sample at a hold.
+    fn steady(t: f64) -> SampleFacts<f64> {
+        facts(0.001, 1.0, true, 1, t)
+    }
+
     /// Seconds until the internal leak is raised, reading `lpm` steadily
     /// in `region` (None: not within 10 s).
     fn time_to_alarm(p: &Params, lpm: f64, region: usize) -> Option<f64> {
@@ -745,7 +780,7 @@ mod tests {
     fn a_leak_reading_the_probabilities_contradict_is_inconclusive_never_healthy() {
         let p = Params::nominal();
         let mut d: Decision<f64> = Decision::new(&p);
-        let mut events = Events::new();
+        let mut feed = Feed::new();
         // The `both` filter reads `lpm` of internal leak; the bank's
         // likelihoods favour the external-only hypothesis.
         let contradicting = |lpm: f64| {
@@ -755,16 +790,8 @@ mod tests {
             }
             out
         };
-        let mut t = 0.0;
         let mut run = |d: &mut Decision<f64>, lpm: f64, secs: f64| {
-            for _ in 0..(secs * 1000.0).round() as usize {
-                t += 0.001;
-                d.update(
-                    &contradicting(lpm),
-                    facts(0.001, 1.0, true, 1, t),
-                    &mut events,
-                );
-            }
+            feed.run(d, &contradicting(lpm), secs, steady);
         };
         // Nothing read: conclusive (healthy) once there is evidence.
         run(&mut d, 0.0, 5.0);
@@ -787,19 +814,14 @@ mod tests {
     fn a_reading_above_the_alarm_level_that_is_not_yet_an_alarm_is_never_healthy() {
         let p = Params::nominal();
         let mut d: Decision<f64> = Decision::new(&p);
-        let mut events = Events::new();
-        let mut t = 0.0;
+        let mut feed = Feed::new();
         // (reading l/min, evidence weight, the plant shows the leaks, s)
         let mut run =
             |d: &mut Decision<f64>, lpm: f64, weight: f64, observable: bool, secs: f64| {
-                for _ in 0..(secs * 1000.0).round() as usize {
-                    t += 0.001;
-                    let f = SampleFacts {
-                        observable,
-                        ..facts(0.001, weight, true, 1, t)
-                    };
-                    d.update(&outputs(lpm), f, &mut events);
-                }
+                feed.run(d, &outputs(lpm), secs, |t| SampleFacts {
+                    observable,
+                    ..facts(0.001, weight, true, 1, t)
+                });
             };
         run(&mut d, 0.0, 1.0, true, 5.0);
         assert!(d.conclusive());
@@ -871,18 +893,12 @@ mod tests {
         p.baseline.region_floor_internal_lpm = [0.0, 0.0, 0.6];
         p.baseline.region_floor_external_lpm = [0.0, 0.3, 0.0];
         let mut d: Decision<f64> = Decision::new(&p);
-        let mut events = Events::new();
-        let mut t = 0.0;
+        let mut feed = Feed::new();
         // `secs` of a healthy reading in `region`: the published levels.
         let mut run = |d: &mut Decision<f64>, region: usize, secs: f64| {
-            for _ in 0..(secs * 1000.0).round() as usize {
-                t += 0.001;
-                d.update(
-                    &outputs(0.0),
-                    facts(0.001, 1.0, true, region, t),
-                    &mut events,
-                );
-            }
+            feed.run(d, &outputs(0.0), secs, |t| {
+                facts(0.001, 1.0, true, region, t)
+            });
             let l = d.alarm_levels();
             (f64::from(l.internal()), f64::from(l.external()))
         };
@@ -1046,13 +1062,9 @@ mod tests {
     fn a_filter_that_resets_makes_the_verdict_inconclusive_for_a_warm_up() {
         let p = Params::nominal();
         let mut d: Decision<f64> = Decision::new(&p);
-        let mut events = Events::new();
-        let mut t = 0.0;
+        let mut feed = Feed::new();
         let mut run = |d: &mut Decision<f64>, out: &[Option<FilterOutput<f64>>; 4], secs: f64| {
-            for _ in 0..(secs * 1000.0) as usize {
-                t += 0.001;
-                d.update(out, facts(0.001, 1.0, true, 1, t), &mut events);
-            }
+            feed.run(d, out, secs, steady);
         };
         run(&mut d, &outputs(0.0), 5.0);
         assert!(d.conclusive(), "5 s of healthy evidence");
