@@ -10,6 +10,7 @@
 use host_sim::calibrate::{calibrate, Calibration};
 use host_sim::eval::exec::row_sample;
 use host_sim::eval::plan::{plan, PlanConfig};
+use host_sim::eval::RigSet;
 use monitor::status::health;
 use monitor::{Event, Monitor, Params, Status, Verdict};
 use plant::{Channel, Fault, Leak, RigSpec, Run, Scenario};
@@ -278,13 +279,23 @@ fn noise_is_estimated_and_leak_flows_are_never_negative() {
 /// The development run `id` of the full matrix's plan, a monitor with its
 /// cell's calibration, as `eval` runs it, and that calibration.
 fn development_run(id: &str) -> (Vec<plant::Row>, Monitor<f32>, Calibration) {
-    let plan = plan(&PlanConfig::default());
+    planned_run(&PlanConfig::default(), id)
+}
+
+/// Run `id` of the matrix `config` plans, with a monitor calibrated as
+/// `host-sim eval` calibrates its cell.
+fn planned_run(config: &PlanConfig, id: &str) -> (Vec<plant::Row>, Monitor<f32>, Calibration) {
+    let plan = plan(config);
     let spec = plan
         .specs()
         .find(|s| s.id == id)
-        .unwrap_or_else(|| panic!("no development run {id}"));
-    let c = &spec.cell;
-    let cal = calibrated(c.rig, c.supply_bar, c.temp_c);
+        .unwrap_or_else(|| panic!("no run {id} in the plan"));
+    let cell = plan
+        .cells
+        .iter()
+        .find(|c| c.cell == spec.cell)
+        .expect("every run's cell is planned");
+    let cal = calibrated_from(&cell.calibration.run());
     let rows = plant::simulate(&spec.run());
     let monitor = Monitor::<f32>::new(&cal.params).unwrap();
     (rows, monitor, cal)
@@ -502,6 +513,29 @@ fn a_step_test_whose_leak_the_alarm_still_waits_on_is_never_healthy() {
     assert!(alarms(&st).is_empty(), "{:?}", alarms(&st));
     let last = st.last().unwrap();
     assert_eq!(last.verdict, Verdict::Inconclusive, "at {} s", last.t_s);
+}
+
+#[test]
+fn a_long_hold_that_only_the_both_filter_reads_as_a_leak_raises_no_alarm() {
+    // Survey rig 39 at 50 bar, 25 °C (no `temp_oil`), a healthy 120 s
+    // hold: the `both` filter's laminar-leakage and external-leak states
+    // grow together (at a hold they can, without changing the predicted
+    // pressures), and its external reading climbed to 0.18 l/min against a
+    // 0.08 level. The external-leak hypothesis fitted best (0.95–0.99),
+    // but with its own coefficient below the healthy baseline: it backs
+    // no leak, and the alarm raised at 94.6 s was false.
+    let quick_survey = PlanConfig {
+        sets: vec![RigSet::Survey],
+        rigs: Some(9),
+        quick: true,
+        ..PlanConfig::default()
+    };
+    let (rows, mut m, _) = planned_run(&quick_survey, "survey/rig39/50bar/25C/long-hold");
+    let st: Vec<Status> = rows.iter().map(|r| m.step(&row_sample(r))).collect();
+    assert!(alarms(&st).is_empty(), "{:?}", alarms(&st));
+    // The `both` filter's reading stands above the level unsupported: the
+    // monitor cannot tell, and says so.
+    assert_eq!(st.last().unwrap().verdict, Verdict::Inconclusive);
 }
 
 #[test]

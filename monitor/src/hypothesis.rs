@@ -1,7 +1,7 @@
 //! The four leak hypotheses of the filter bank: one filter per
 //! [`LeakSet`], named after the leaks its model contains.
 
-use crate::leak::LeakSet;
+use crate::leak::{Leak, LeakSet};
 
 /// Which leaks a hypothesis (and its filter) contains.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -24,6 +24,14 @@ impl Hypothesis {
     /// The leaks its model contains (same code as the hypothesis).
     pub const fn leaks(self) -> LeakSet {
         LeakSet::from_bits(self as u8)
+    }
+
+    /// The hypothesis of `leak` alone.
+    pub const fn single(leak: Leak) -> Self {
+        match leak {
+            Leak::Internal => Self::Internal,
+            Leak::External => Self::External,
+        }
     }
 
     /// Lower-case name, as in the replay JSON.

@@ -216,9 +216,9 @@ impl<T: Real, const N: usize> HypothesisFilter<T, N> {
         })
     }
 
-    /// The step's output. The leak flows and the valve gains are the
-    /// `both` filter's only (the decision reads no other's; zero for the
-    /// others): the other filters' evidence is their likelihood.
+    /// The step's output: likelihood and innovations; each leak filter's
+    /// own leak flows (zero for a leak it lacks); the valve gains of the
+    /// `both` filter only (the decision reads no other's).
     fn output(&self, ctx: &StepContext<T>, e: &Eval<T>, inn: &Innovations<T>) -> FilterOutput<T> {
         let mut out = FilterOutput {
             nis: inn.nis,
@@ -230,10 +230,9 @@ impl<T: Real, const N: usize> HypothesisFilter<T, N> {
             valve_flow_lpm: e.q_valve_a.abs() * T::c(crate::estimation::model::LPM_PER_M3S),
             ..FilterOutput::default()
         };
-        // Only the `both` filter has MAX_STATES states: a constant per
-        // filter, as in `leak_indices`.
-        if N == MAX_STATES {
-            let gref = T::c(crate::estimation::model::GAIN_REF);
+        // The healthy filter has NB states, `both` MAX_STATES: constants
+        // per filter, as in `leak_indices`.
+        if N > NB {
             let (internal, external) = self.leak_indices();
             let (leak_internal, leak_internal_sd) = self.leak(internal);
             let (leak_external, leak_external_sd) = self.leak(external);
@@ -248,6 +247,9 @@ impl<T: Real, const N: usize> HypothesisFilter<T, N> {
             out.flow_internal_sd_lpm = leak_internal_sd * dp_int;
             out.flow_external_sd_lpm = leak_external_sd * dp_ext;
             out.dp_10bar = [dp_int, dp_ext];
+        }
+        if N == MAX_STATES {
+            let gref = T::c(crate::estimation::model::GAIN_REF);
             out.valve_gain = [self.ekf.x[GAIN_EXT] * gref, self.ekf.x[GAIN_RET] * gref];
         }
         out

@@ -97,9 +97,11 @@ pub struct FilterOutput<T> {
     pub nis: T,
     /// Gaussian log-likelihood of this sample's measurements.
     pub log_likelihood: T,
-    /// Internal leak flow at the current pressures, l/min. This, the other
-    /// flows, `dp_10bar` and `valve_gain` are the `both` filter's only
-    /// (the decision reads no other's): 0 for the other filters.
+    /// Internal leak flow at the current pressures, l/min. The flows and
+    /// `dp_10bar` are reported by every filter with that leak (0
+    /// otherwise): the decision alarms on the `both` filter's and asks a
+    /// single-leak filter's whether its likelihood speaks for a leak at
+    /// all. `valve_gain` is the `both` filter's only.
     pub flow_internal_lpm: T,
     /// External leak flow at the current pressures, l/min.
     pub flow_external_lpm: T,

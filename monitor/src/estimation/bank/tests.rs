@@ -417,16 +417,22 @@ fn no_internal_leak_flow_is_claimed_while_the_chamber_pressures_are_equal() {
 }
 
 #[test]
-fn only_the_both_filter_reports_leak_flows_and_valve_gains() {
-    // The internal-leak filter in the same place: its evidence is its
-    // likelihood; the flows and gains the decision reads are the `both`
-    // filter's.
+fn each_leak_filter_reports_its_own_leak_flow_and_only_both_the_valve_gains() {
+    // The internal-leak filter in the same place: its flow (which tells
+    // the decision whether its likelihood speaks for a leak at all) is
+    // its own coefficient times the pressure difference, like the `both`
+    // filter's; the valve gains the decision reads are the `both`
+    // filter's only.
     let out = internal_leak_at_hold::<{ NB + 1 }>(Hypothesis::Internal, 8.0);
     assert!(out.log_likelihood.is_finite() && out.nis > 0.0);
+    assert!(out.flow_internal_lpm > 2.0, "{}", out.flow_internal_lpm);
+    assert!(out.flow_internal_sd_lpm > 0.0);
+    // About 8 bar across the piston (less the step's own change).
+    assert!(out.dp_10bar[0] > 0.6, "{:?}", out.dp_10bar);
     assert_eq!(
         (
-            out.flow_internal_lpm,
-            out.flow_internal_sd_lpm,
+            out.flow_external_lpm,
+            out.flow_external_sd_lpm,
             out.valve_gain
         ),
         (0.0, 0.0, [0.0; 2])
