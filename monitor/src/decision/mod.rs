@@ -348,8 +348,14 @@ impl<T: Real> Decision<T> {
     /// The alarm waits for persistence; `healthy` must not claim what it
     /// is waiting on (a step test that ends with the piston at a stop
     /// can hold such a reading with almost no evidence weight left).
+    /// The same holds for a reading the probabilities do not back, until
+    /// its contradiction count has run back to 0: shorter than the
+    /// debounce time it is no contradiction yet, and no evidence of
+    /// health either.
     fn pending(&self) -> bool {
-        Leak::ALL.iter().any(|&k| self.persist[k] > T::ZERO)
+        Leak::ALL
+            .iter()
+            .any(|&k| self.persist[k] > T::ZERO || self.unsupported[k] > T::ZERO)
     }
 
     /// An operator's acknowledgement at `t_ms` (sample time): the latch
@@ -873,6 +879,40 @@ mod tests {
         run(&mut d, 0.0, 1.0, true, 1.0);
         assert!(d.conclusive());
         assert!(d.latched().is_empty());
+    }
+
+    #[test]
+    fn a_reading_the_probabilities_do_not_back_is_never_healthy_before_it_is_a_contradiction() {
+        let p = Params::nominal();
+        let mut d: Decision<f64> = Decision::new(&p);
+        let mut feed = Feed::new();
+        // The healthy hypothesis fits best throughout.
+        let healthy_best = |lpm: f64| {
+            let mut out = outputs(lpm);
+            for (i, o) in out.iter_mut().flatten().enumerate() {
+                o.log_likelihood = if i == 0 { 0.0 } else { -50.0 };
+            }
+            out
+        };
+        let mut run =
+            |d: &mut Decision<f64>, lpm: f64, weight: f64, observable: bool, secs: f64| {
+                feed.run(d, &healthy_best(lpm), secs, |t| SampleFacts {
+                    observable,
+                    ..facts(0.001, weight, true, 1, t)
+                });
+            };
+        run(&mut d, 0.0, 1.0, true, 5.0);
+        assert!(d.conclusive());
+        // A short reading at three times the level that the bank does not
+        // back, then (almost) no evidence: shorter than the debounce time
+        // it is no contradiction yet, and not `healthy` either.
+        run(&mut d, 3.0 * p.alarm.alarm_lpm, 1.0, true, 0.2);
+        run(&mut d, 3.0 * p.alarm.alarm_lpm, 0.01, false, 3.0);
+        assert!(d.latched().is_empty());
+        assert!(!d.contradicted());
+        assert!(!d.conclusive());
+        run(&mut d, 0.0, 1.0, true, 1.0);
+        assert!(d.conclusive());
     }
 
     #[test]
