@@ -48,8 +48,9 @@
 //!    `evidence_memory_s`) of at least `min_evidence_fraction`, no filter
 //!    reset within the warm-up time, a model that fits (mean NIS of
 //!    the best filter below [`MISMATCH_NIS`], and no leak reading the
-//!    probabilities contradict), and no leak reading pending (its CUSUM
-//!    above 0: the alarm is still waiting on it). Without that the verdict is
+//!    probabilities contradict), and no leak reading pending (its CUSUM,
+//!    or its contradiction count, above 0: the alarm is still waiting on
+//!    it). Without that the verdict is
 //!    `inconclusive` ([`Decision::conclusive`]). A sample at which the
 //!    `both` filter holds valve flow gains beyond [`VALVE_GAIN_MISFIT`]
 //!    counts as no evidence at all: the valve model does not describe the
