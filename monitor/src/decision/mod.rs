@@ -758,6 +758,18 @@ mod tests {
         })
     }
 
+    /// `out` with hypothesis `best` explaining the data best (the others'
+    /// log-likelihoods 50 below).
+    fn fitting_best(
+        mut out: [Option<FilterOutput<f64>>; 4],
+        best: Hypothesis,
+    ) -> [Option<FilterOutput<f64>>; 4] {
+        for (h, o) in Hypothesis::ALL.into_iter().zip(out.iter_mut().flatten()) {
+            o.log_likelihood = if h == best { 0.0 } else { -50.0 };
+        }
+        out
+    }
+
     /// Feeds a decision 1 ms samples on one sample clock.
     struct Feed {
         t: f64,
@@ -824,13 +836,7 @@ mod tests {
         let mut feed = Feed::new();
         // The `both` filter reads `lpm` of internal leak; the bank's
         // likelihoods favour the external-only hypothesis.
-        let contradicting = |lpm: f64| {
-            let mut out = outputs(lpm);
-            for (i, o) in out.iter_mut().enumerate() {
-                o.as_mut().unwrap().log_likelihood = if i == 2 { 0.0 } else { -50.0 };
-            }
-            out
-        };
+        let contradicting = |lpm: f64| fitting_best(outputs(lpm), Hypothesis::External);
         let mut run = |d: &mut Decision<f64>, lpm: f64, secs: f64| {
             feed.run(d, &contradicting(lpm), secs, steady);
         };
@@ -894,13 +900,7 @@ mod tests {
         let mut d: Decision<f64> = Decision::new(&Params::nominal());
         let mut feed = Feed::new();
         // The healthy hypothesis fits best throughout.
-        let healthy_best = |lpm: f64| {
-            let mut out = outputs(lpm);
-            for (i, o) in out.iter_mut().flatten().enumerate() {
-                o.log_likelihood = if i == 0 { 0.0 } else { -50.0 };
-            }
-            out
-        };
+        let healthy_best = |lpm: f64| fitting_best(outputs(lpm), Hypothesis::Healthy);
         // Shorter than the debounce time the unbacked reading is no
         // contradiction yet, and not `healthy` either.
         a_move_reading_then_a_stop(&mut d, &mut feed, healthy_best);
@@ -1066,10 +1066,9 @@ mod tests {
         // The `both` hypothesis explains the data best; the internal leak
         // reads 1 l/min and is raised first.
         let both = |internal_lpm: f64, external_lpm: f64| {
-            let mut out = outputs(internal_lpm);
-            for (h, o) in Hypothesis::ALL.into_iter().zip(out.iter_mut().flatten()) {
+            let mut out = fitting_best(outputs(internal_lpm), Hypothesis::Both);
+            for o in out.iter_mut().flatten() {
                 o.flow_external_lpm = external_lpm;
-                o.log_likelihood = if h == Hypothesis::Both { 0.0 } else { -50.0 };
             }
             out
         };
@@ -1103,24 +1102,12 @@ mod tests {
         // false alarm in a healthy step test of the further development
         // rigs, `eval --set wide`).
         let run = |internal_lpm: f64| {
-            let mut out = outputs(internal_lpm);
-            for (h, o) in Hypothesis::ALL.into_iter().zip(out.iter_mut().flatten()) {
+            let mut out = fitting_best(outputs(internal_lpm), Hypothesis::Internal);
+            for o in out.iter_mut().flatten() {
                 o.flow_external_lpm = 0.8;
-                o.log_likelihood = if h == Hypothesis::Internal {
-                    0.0
-                } else {
-                    -50.0
-                };
             }
             let mut d: Decision<f64> = Decision::new(&Params::nominal());
-            let mut events = Events::new();
-            for i in 0..10_000 {
-                d.update(
-                    &out,
-                    facts(0.001, 1.0, true, 1, i as f64 * 0.001),
-                    &mut events,
-                );
-            }
+            Feed::new().run(&mut d, &out, 10.0, steady);
             d.latched()
         };
         assert_eq!(run(0.0), LeakSet::NONE);
@@ -1136,13 +1123,8 @@ mod tests {
         // states drifted together through a long hold on a survey rig):
         // no alarm, and no `healthy` either.
         let run = |single_external_lpm: f64| {
-            let mut out = outputs(0.0);
+            let mut out = fitting_best(outputs(0.0), Hypothesis::External);
             for (h, o) in Hypothesis::ALL.into_iter().zip(out.iter_mut().flatten()) {
-                o.log_likelihood = if h == Hypothesis::External {
-                    0.0
-                } else {
-                    -50.0
-                };
                 o.flow_external_lpm = match h {
                     Hypothesis::External => single_external_lpm,
                     Hypothesis::Both => 0.8,

@@ -97,11 +97,12 @@ pub struct FilterOutput<T> {
     pub nis: T,
     /// Gaussian log-likelihood of this sample's measurements.
     pub log_likelihood: T,
-    /// Internal leak flow at the current pressures, l/min. The flows and
-    /// `dp_10bar` are reported by every filter with that leak (0
-    /// otherwise): the decision alarms on the `both` filter's and asks a
-    /// single-leak filter's whether its likelihood speaks for a leak at
-    /// all. `valve_gain` is the `both` filter's only.
+    /// Internal leak flow at the current pressures, l/min. Each flow and
+    /// its σ are reported by every filter with that leak (0 otherwise),
+    /// `dp_10bar` by every filter with a leak: the decision alarms on the
+    /// `both` filter's flows and asks a single-leak filter's whether its
+    /// likelihood speaks for a leak at all. `valve_gain` is the `both`
+    /// filter's only.
     pub flow_internal_lpm: T,
     /// External leak flow at the current pressures, l/min.
     pub flow_external_lpm: T,
