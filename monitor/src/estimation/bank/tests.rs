@@ -271,11 +271,7 @@ fn dense_step<T: Real, const N: usize>(f: &mut HypothesisFilter<T, N>, s: &Setti
     let q = s.noise.variances(s.ctx.step.dt);
     let q: [T; N] = core::array::from_fn(|i| q[i]);
     crate::estimation::ekf::predict_covariance_dense(&mut f.ekf.p, &phi, &q);
-    let w: [T; N] = core::array::from_fn(|i| match i {
-        GAIN_EXT | GAIN_RET => s.ctx.gain_learning,
-        i if i >= LAMINAR => s.ctx.learning,
-        _ => T::ONE,
-    });
+    let w = f.learning_weights(&s.ctx);
     for (k, &j) in MEASURED.iter().enumerate() {
         let lag = if j == XP {
             T::ZERO
@@ -414,6 +410,32 @@ fn no_internal_leak_flow_is_claimed_while_the_chamber_pressures_are_equal() {
     // 8 bar across the piston: the same coefficient is a 2.4 l/min leak.
     let apart = run(Hypothesis::Both, 8.0);
     assert!(apart.flow_internal_lpm > 2.0, "{}", apart.flow_internal_lpm);
+}
+
+#[test]
+fn the_internal_leak_learns_nothing_while_the_chamber_pressures_are_equal() {
+    // Its flow θ·Δp does not depend on θ there: whatever the coefficient
+    // would learn is the model's error, read as a leak at the next move.
+    let s = setting::<f64>(false);
+    let weights = |p4_bar_below_p3: f64| {
+        let mut s0 = s.s0;
+        s0[P4] = s0[P3] - p4_bar_below_p3 * BAR / 1e7;
+        let f = HypothesisFilter::<f64, { NB + 2 }>::new(Hypothesis::Both, &s0, &[1e-3; NB], 1.0);
+        let (Some(internal), Some(external)) = leak_indices::<{ NB + 2 }>(Hypothesis::Both) else {
+            panic!("`both` has both leak states")
+        };
+        let w = f.learning_weights(&s.ctx);
+        (w[internal], w[external])
+    };
+    let learning = s.ctx.learning;
+    let (internal, external) = weights(0.0);
+    assert!(internal < 1e-9, "{internal}");
+    assert_eq!(external, learning);
+    // Half weight at 1 bar; 8 bar apart it learns almost fully.
+    assert!((weights(1.0).0 - 0.5 * learning).abs() < 1e-9);
+    let (internal, external) = weights(8.0);
+    assert!(internal > 0.98 * learning, "{internal}");
+    assert_eq!(external, learning);
 }
 
 #[test]
