@@ -301,6 +301,19 @@ fn planned_run(config: &PlanConfig, id: &str) -> (Vec<plant::Row>, Monitor<f32>,
     (rows, monitor, cal)
 }
 
+/// The statuses of run `id` of the survey's `--quick` matrix over its
+/// first `rigs` rigs, its cell calibrated as `host-sim eval` does it.
+fn quick_survey_run(rigs: usize, id: &str) -> Vec<Status> {
+    let config = PlanConfig {
+        sets: vec![RigSet::Survey],
+        rigs: Some(rigs),
+        quick: true,
+        ..PlanConfig::default()
+    };
+    let (rows, mut m, _) = planned_run(&config, id);
+    rows.iter().map(|r| m.step(&row_sample(r))).collect()
+}
+
 /// Development rig `rig` at `supply_bar`, `temp_c` calibrated from the
 /// nominal parameters as `host-sim eval` does it: from the cell's 60 s
 /// healthy recording in the full matrix's plan.
@@ -524,14 +537,7 @@ fn a_long_hold_that_only_the_both_filter_reads_as_a_leak_raises_no_alarm() {
     // 0.08 level. The external-leak hypothesis fitted best (0.95–0.99),
     // but with its own coefficient below the healthy baseline: it backs
     // no leak, and the alarm raised at 94.6 s was false.
-    let quick_survey = PlanConfig {
-        sets: vec![RigSet::Survey],
-        rigs: Some(9),
-        quick: true,
-        ..PlanConfig::default()
-    };
-    let (rows, mut m, _) = planned_run(&quick_survey, "survey/rig39/50bar/25C/long-hold");
-    let st: Vec<Status> = rows.iter().map(|r| m.step(&row_sample(r))).collect();
+    let st = quick_survey_run(9, "survey/rig39/50bar/25C/long-hold");
     assert!(alarms(&st).is_empty(), "{:?}", alarms(&st));
     // The `both` filter's reading stands above the level unsupported: the
     // monitor cannot tell, and says so.
@@ -547,14 +553,7 @@ fn a_warm_up_at_equal_chamber_pressures_teaches_no_internal_leak() {
     // climbed to 0.6, scaled, in the hold). With the internal coefficient
     // held where it cannot be seen — in this run and in the calibration of
     // the cell — it raises none.
-    let survey = PlanConfig {
-        sets: vec![RigSet::Survey],
-        rigs: Some(46),
-        quick: true,
-        ..PlanConfig::default()
-    };
-    let (rows, mut m, _) = planned_run(&survey, "survey/rig76/100bar/40C/healthy-1");
-    let st: Vec<Status> = rows.iter().map(|r| m.step(&row_sample(r))).collect();
+    let st = quick_survey_run(46, "survey/rig76/100bar/40C/healthy-1");
     assert!(alarms(&st).is_empty(), "{:?}", alarms(&st));
 }
 
