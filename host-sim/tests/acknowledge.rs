@@ -6,7 +6,12 @@
 //! time is measured from the first alarm on: it must be zero. The same
 //! floods with the policy's times set to zero (what the firmware did before
 //! the policy: every acknowledge accepted at once, the relay back with the
-//! next healthy verdict) energise it, so the measurement can fail.
+//! next healthy verdict) are accepted many times more. They energised the
+//! relay for 46–94 % of the time after the alarm until the healthy claim
+//! needed every reported leak size below the alarm level (`8f62a4a`); now
+//! they keep it off too (the leak is still reported after each accepted
+//! acknowledge), and the policy's own tests (`decision::acknowledge`) show
+//! what it holds back.
 //!
 //! The one window documented in `docs/acknowledge.md` (the relay follows
 //! the monitor's own `healthy` before it first detects the leak) is
@@ -177,10 +182,15 @@ fn acknowledge_floods_during_a_recorded_leak_never_energise_the_relay() {
         );
         // The documented window only: the same as without acknowledges.
         assert_eq!(policy.energised_before_alarm, quiet.energised_before_alarm);
+        // Without the policy every acknowledge is accepted at once (so
+        // the policy is what holds them back) — and the relay stays off
+        // all the same: after each, the leak is still reported above its
+        // alarm level, and the monitor claims no `healthy`.
         assert!(
-            before.energised_after_alarm > 0,
-            "without the policy the flood every {every_ms} ms should energise the relay"
+            before.count(AckResult::Accepted) > policy.count(AckResult::Accepted),
+            "without the policy the flood every {every_ms} ms should be accepted more often"
         );
+        assert_eq!(before.energised_after_alarm, 0);
         // Every attempt is one event.
         assert_eq!(policy.events.len(), policy.attempts);
         assert!(policy.count(AckResult::Rejected(AckRejected::HoldOff)) > 0);
@@ -223,7 +233,8 @@ fn acknowledge_floods_during_a_long_simulated_leak_never_energise_the_relay() {
             policy.evidence_pending_checked,
         );
         assert_eq!(policy.energised_after_alarm, 0);
-        assert!(before.energised_after_alarm > 0);
+        assert!(before.count(AckResult::Accepted) > accepted.len());
+        assert_eq!(before.energised_after_alarm, 0);
         assert!(accepted.len() >= 2, "accepted {accepted:?}");
         assert!(accepted.windows(2).all(|w| w[1] - w[0] >= 60_000));
         assert!(accepted[0] >= policy.first_alarm_ms.unwrap() + 10_000);
