@@ -157,16 +157,18 @@ impl<T: Real, const N: usize> HypothesisFilter<T, N> {
     /// coefficient learned there was the model's error, carried into the
     /// next move.
     pub(super) fn learning_weights(&self, ctx: &StepContext<T>) -> [T; N] {
-        let (internal, _) = self.leak_indices();
-        let dp = self.ekf.x[P3] - self.ekf.x[P4];
-        let seen = dp * dp / (dp * dp + T::c(INTERNAL_DP_SEEN * INTERNAL_DP_SEEN));
-        core::array::from_fn(|i| match i {
+        let mut weights: [T; N] = core::array::from_fn(|i| match i {
             GAIN_EXT | GAIN_RET => ctx.gain_learning,
-            LAMINAR => ctx.learning,
-            i if Some(i) == internal => ctx.learning * seen,
-            i if i >= NB => ctx.learning,
+            i if i >= LAMINAR => ctx.learning,
             _ => T::ONE,
-        })
+        });
+        // Only filters with the state pay for the division.
+        if let (Some(internal), _) = self.leak_indices() {
+            let dp = self.ekf.x[P3] - self.ekf.x[P4];
+            let seen = dp * dp / (dp * dp + T::c(INTERNAL_DP_SEEN * INTERNAL_DP_SEEN));
+            weights[internal] = ctx.learning * seen;
+        }
+        weights
     }
 
     /// The three scalar updates (x_p, p3, p4): innovations, NIS and the
