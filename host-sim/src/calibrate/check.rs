@@ -87,9 +87,16 @@ pub fn run_pieces(
     let (mut healthy, mut leading, mut evident_s, mut misfit_s) = (0.0, 0.0, 0.0, 0.0);
     let mut last_t: Option<f64> = None;
     let band = p.hold_band();
+    let mut carry = Carry::default();
+    let fast_s = p.filter.detection_window_s;
     for s in pieces.iter().flat_map(|piece| piece.iter()) {
         let st = m.step(s);
         let dt = last_t.map_or(0.0, |t| (s.t_s - t).clamp(0.0, 0.01));
+        let own = carry.update(
+            s.u_valve.map(|u| operating_region(u, band)),
+            [st.detect_internal_lpm, st.detect_external_lpm],
+            (st.evidence_weight as f64 * dt / fast_s).min(1.0),
+        );
         last_t = Some(s.t_s);
         for e in &st.events {
             match e {
@@ -132,7 +139,7 @@ pub fn run_pieces(
                 r.detect_max_lpm[k] = r.detect_max_lpm[k].max(d);
                 if let Some(u) = s.u_valve {
                     let m = &mut r.detect_region_max_lpm[k][operating_region(u, band)];
-                    *m = m.max(d);
+                    *m = m.max(own[k]);
                 }
             }
         }
@@ -158,4 +165,87 @@ pub fn run_pieces(
     r.evidence_fraction = share(evident_s);
     r.valve_misfit_fraction = share(misfit_s);
     Ok(r)
+}
+
+/// The part of a holding region's detection reading that the move before
+/// it carries in. The reading is an average in evidence time: when the
+/// plant comes to rest it still holds the move's value, which decays as
+/// the hold's own flows come in, and the monitor's alarm level falls from
+/// the move's floor at the same pace and judges only the hold's own part
+/// of the reading against the hold's level (`decision::Decision`). The
+/// reading less that carried part is the hold's own (exactly: both
+/// follow the same linear average). A move keeps its whole reading: a
+/// move is short, its reading mostly what the hold before left, and with
+/// that part taken out a development rig's extend floor fell to the
+/// alarm level and a slower extension than calibration saw alarmed in a
+/// healthy run (docs/evaluation.md).
+#[derive(Default)]
+struct Carry {
+    region: Option<usize>,
+    last: [f64; 2],
+    carried: [f64; 2],
+}
+
+impl Carry {
+    /// The holding region's index in `check::REGIONS` order.
+    const HOLDING: usize = 1;
+
+    /// Take one sample: its region (none without a valve command), its
+    /// detection readings and the share `a` of the average it refreshes.
+    /// Returns per leak the part of the reading that is the region's
+    /// own, l/min.
+    fn update(&mut self, region: Option<usize>, det: [Option<f32>; 2], a: f64) -> [f64; 2] {
+        let det = det.map(|d| d.map_or(0.0, f64::from));
+        let holding = region == Some(Self::HOLDING);
+        let came_to_rest = holding && self.region.is_some_and(|r| r != Self::HOLDING);
+        for k in 0..2 {
+            if came_to_rest {
+                self.carried[k] = self.last[k];
+            }
+            self.carried[k] = if holding {
+                self.carried[k] * (1.0 - a)
+            } else {
+                0.0
+            };
+        }
+        if region.is_some() {
+            self.region = region;
+        }
+        self.last = det;
+        [0, 1].map(|k| (det[k] - self.carried[k]).abs())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Carry;
+
+    /// Feeds `carry` `secs` of a 0.25 s evidence-time average of `flow`
+    /// l/min of external reading in `region` at weight 1 (1 ms samples),
+    /// from `fast`; returns the largest own part and the average after.
+    fn feed(carry: &mut Carry, fast: &mut f64, region: usize, flow: f64, secs: f64) -> f64 {
+        let a = 0.001 / 0.25;
+        let mut own_max = 0.0f64;
+        for _ in 0..(secs * 1000.0) as usize {
+            *fast += a * (flow - *fast);
+            let own = carry.update(Some(region), [None, Some(*fast as f32)], a);
+            own_max = own_max.max(own[1]);
+        }
+        own_max
+    }
+
+    #[test]
+    fn a_moves_reading_carried_into_a_hold_is_the_moves() {
+        let (mut carry, mut fast) = (Carry::default(), 0.0);
+        // Retracting reads 0.5 l/min, the hold after it 0.02: the reading
+        // falls from 0.5 through the hold, and only 0.02 is the hold's.
+        assert!(feed(&mut carry, &mut fast, 0, 0.5, 2.0) > 0.49);
+        let hold = feed(&mut carry, &mut fast, 1, 0.02, 2.0);
+        assert!(hold < 0.021, "{hold}");
+        // A move keeps its whole reading, the hold's carried in with it.
+        let (mut carry, mut fast) = (Carry::default(), 0.0);
+        feed(&mut carry, &mut fast, 1, 0.3, 2.0);
+        let extend = feed(&mut carry, &mut fast, 2, 0.02, 0.1);
+        assert!(extend > 0.2, "{extend}");
+    }
 }
