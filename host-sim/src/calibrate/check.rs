@@ -2,7 +2,7 @@
 //! fit, the healthy baseline and the held-out validation need.
 
 use super::CalibrationError;
-use monitor::params::operating_region;
+use monitor::params::{operating_region, HOLDING_REGION};
 use monitor::status::health;
 use monitor::{Event, Monitor, Params, Sample, Verdict};
 
@@ -187,17 +187,14 @@ struct Carry {
 }
 
 impl Carry {
-    /// The holding region's index in `check::REGIONS` order.
-    const HOLDING: usize = 1;
-
     /// Take one sample: its region (none without a valve command), its
     /// detection readings and the share `a` of the average it refreshes.
     /// Returns per leak the part of the reading that is the region's
     /// own, l/min.
     fn update(&mut self, region: Option<usize>, det: [Option<f32>; 2], a: f64) -> [f64; 2] {
         let det = det.map(|d| d.map_or(0.0, f64::from));
-        let holding = region == Some(Self::HOLDING);
-        let came_to_rest = holding && self.region.is_some_and(|r| r != Self::HOLDING);
+        let holding = region == Some(HOLDING_REGION);
+        let came_to_rest = holding && self.region.is_some_and(|r| r != HOLDING_REGION);
         for k in 0..2 {
             if came_to_rest {
                 self.carried[k] = self.last[k];

@@ -82,7 +82,7 @@ pub mod acknowledge;
 use crate::estimation::bank::FilterOutput;
 use crate::hypothesis::Hypothesis;
 use crate::leak::{Leak, LeakSet, PerLeak};
-use crate::params::Params;
+use crate::params::{Params, HOLDING_REGION};
 use crate::real::Real;
 use crate::status::{health, Event, Events, Evidence, Verdict};
 use latch::{AckOutcome, Latch};
@@ -307,13 +307,13 @@ impl<T: Real> Decision<T> {
                 params.baseline.external_lpm_per_10bar.map(T::c),
             ),
             baseline_now: PerLeak::new(
-                T::c(params.baseline.internal_lpm_per_10bar[1]),
-                T::c(params.baseline.external_lpm_per_10bar[1]),
+                T::c(params.baseline.internal_lpm_per_10bar[HOLDING_REGION]),
+                T::c(params.baseline.external_lpm_per_10bar[HOLDING_REGION]),
             ),
             // Starting at a hold, like the baseline.
-            level_now: alarm_lpm.map(|levels| levels[1]),
+            level_now: alarm_lpm.map(|levels| levels[HOLDING_REGION]),
             carried: PerLeak::splat(T::ZERO),
-            region: 1,
+            region: HOLDING_REGION,
             evidence_s: T::ZERO,
             recent_weight: T::ZERO,
             recent_time: T::ZERO,

@@ -542,16 +542,19 @@ pub struct Params {
     pub can: CanConfig,
 }
 
+/// The holding region's index in [`operating_region`]'s numbering.
+pub const HOLDING_REGION: usize = 1;
+
 /// Operating region of a valve command for `[baseline]`: 0 retracting
-/// (u < null − dead zone), 1 holding, 2 extending (u > null + dead zone).
-/// `hold_band` is [`Params::hold_band`].
+/// (u < null − dead zone), 1 holding ([`HOLDING_REGION`]), 2 extending
+/// (u > null + dead zone). `hold_band` is [`Params::hold_band`].
 pub fn operating_region(u: f32, hold_band: (f32, f32)) -> usize {
     if u < hold_band.0 {
         0
     } else if u > hold_band.1 {
         2
     } else {
-        1
+        HOLDING_REGION
     }
 }
 
