@@ -11,9 +11,9 @@ use crate::estimation::bank::{
 };
 use crate::estimation::consistency::NoiseMatch;
 use crate::estimation::model::{Inputs, Plant, Step, BAR, GAIN_REF, LAMINAR_REF, NX, P_REF, X_REF};
-use crate::estimation::quiet::{self, Quietness};
+use crate::estimation::quiet::{self, PistonSpeed, Quietness};
 use crate::hypothesis::Hypothesis;
-use crate::params::{operating_region, ParamError, Params};
+use crate::params::{operating_region, ParamError, Params, HOLDING_REGION};
 use crate::physics::fluid::laminar_flow_factor;
 use crate::physics::valve::SpoolStep;
 use crate::real::Real;
@@ -52,6 +52,11 @@ struct Config<T> {
     hold_band: (f32, f32),
 }
 
+/// Piston speed (from the position reading), m/s, below which the piston
+/// is at rest: the sample belongs to the holding region whatever the
+/// valve command (0.2 l/min of piston flow at the thesis rig's piston area).
+const HOLD_SPEED_M_S: f64 = 1e-3;
+
 /// The leak monitor for one cylinder.
 #[derive(Clone, Debug)]
 pub struct Monitor<T: Real = f32> {
@@ -72,6 +77,11 @@ pub struct Monitor<T: Real = f32> {
     decision: Decision<T>,
     temp_c: Option<f32>,
     laminar_factor: T,
+    /// Operating region of the last sample for the baseline and the alarm
+    /// level (`operating_region`, or holding while the piston is at rest).
+    region: usize,
+    /// The piston speed from the position reading alone.
+    speed: PistonSpeed<T>,
     /// Inputs of the previous sample: they drove the plant until this one.
     held: Option<HeldInputs>,
     /// How quasi-steady the plant is: the learning weight of the parameter
@@ -152,6 +162,8 @@ impl<T: Real> Monitor<T> {
             temp_c: None,
             laminar_factor: T::ONE,
             held: None,
+            region: HOLDING_REGION,
+            speed: PistonSpeed::default(),
             quiet: Quietness::new(
                 f.quiet_rate_bar_s,
                 f.quiet_flow_lpm,
@@ -254,6 +266,7 @@ impl<T: Real> Monitor<T> {
             self.warming = true;
             self.decision.restart();
             self.quiet.restart();
+            self.speed.restart();
             self.matching.restart();
             return self.status(
                 sample.t_s,
@@ -271,8 +284,19 @@ impl<T: Real> Monitor<T> {
         }
         // Pinned with the valve open (an end stop): no leak evidence, and
         // nothing for the leak states or valve gains to learn.
-        let region = operating_region(c.u_valve, self.cfg.hold_band);
-        let pinned = quiet::pinned(&c, region);
+        let command_region = operating_region(c.u_valve, self.cfg.hold_band);
+        let pinned = quiet::pinned(&c, command_region);
+        // For the baseline and the alarm level a piston at rest holds,
+        // whatever the command: the loop that holds it against a leak
+        // opens the valve past the dead zone to feed the leak, and a
+        // move's floor there would hide the leak it feeds.
+        let speed_m_s = self.speed.update(T::from_f32(c.x_piston_m), T::c(dt));
+        let region = if speed_m_s.abs() < T::c(HOLD_SPEED_M_S) {
+            HOLDING_REGION
+        } else {
+            command_region
+        };
+        self.region = region;
         let no_evidence = suspect || pinned;
         let u_valve = T::from_f32(held.u_valve);
         let ctx = StepContext {
@@ -447,6 +471,13 @@ impl<T: Real> Monitor<T> {
         }
     }
 
+    /// The operating region of the last sample for the baseline and the
+    /// alarm level: 0 retracting, 1 holding, 2 extending
+    /// (`params::operating_region`; holding while the piston is at rest).
+    pub fn region(&self) -> usize {
+        self.region
+    }
+
     /// Every filter's state, in bank order (healthy, internal, external,
     /// both), for diagnostics, calibration and tests; `None` while the bank
     /// is not running.
@@ -505,4 +536,43 @@ struct HeldInputs {
 fn initial_state<T: Real>(m: &Measurement<T>, u_valve: f32) -> [T; NX] {
     let [x, p3, p4] = m.z;
     [x, T::ZERO, T::from_f32(u_valve), T::ZERO, p3, p4]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::testutil::good_sample;
+
+    /// A monitor whose retracting region alarms external leaks only from
+    /// 0.68 l/min, run for 2 s with the command just past the dead zone
+    /// toward retracting and the piston at `speed_m_s`; returns the last
+    /// sample's region and external alarm level.
+    fn region_and_level_at(speed_m_s: f64) -> (usize, f32) {
+        let mut p = Params::nominal();
+        p.baseline.region_floor_external_lpm = [0.68, 0.0, 0.0];
+        let u = p.hold_band().0 - 0.005;
+        let mut m = Monitor::<f64>::new(&p).unwrap();
+        let mut level = f32::NAN;
+        for i in 0..2000 {
+            let t = i as f64 * 1e-3;
+            let mut s = good_sample(t);
+            s.u_valve = Some(u);
+            s.x_piston_m = Some((0.2 - speed_m_s * t) as f32);
+            level = m.step(&s).alarm_level_lpm[1];
+        }
+        (m.region(), level)
+    }
+
+    #[test]
+    fn a_piston_at_rest_is_judged_at_the_holds_level_whatever_the_command() {
+        // The loop holding a piston against an external leak opens the
+        // valve past the dead zone to feed it: still a hold.
+        let (region, level) = region_and_level_at(0.0);
+        assert_eq!(region, HOLDING_REGION);
+        assert!(level < 0.1, "level at rest {level}");
+        // A retraction at 20 mm/s with the same command is a move.
+        let (region, level) = region_and_level_at(0.02);
+        assert_eq!(region, 0);
+        assert!((level - 0.68).abs() < 1e-3, "level moving {level}");
+    }
 }

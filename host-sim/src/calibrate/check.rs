@@ -2,7 +2,7 @@
 //! fit, the healthy baseline and the held-out validation need.
 
 use super::CalibrationError;
-use monitor::params::{operating_region, HOLDING_REGION};
+use monitor::params::HOLDING_REGION;
 use monitor::status::health;
 use monitor::{Event, Monitor, Params, Sample, Verdict};
 
@@ -86,14 +86,13 @@ pub fn run_pieces(
     let mut r = Run::default();
     let (mut healthy, mut leading, mut evident_s, mut misfit_s) = (0.0, 0.0, 0.0, 0.0);
     let mut last_t: Option<f64> = None;
-    let band = p.hold_band();
     let mut carry = Carry::default();
     let fast_s = p.filter.detection_window_s;
     for s in pieces.iter().flat_map(|piece| piece.iter()) {
         let st = m.step(s);
         let dt = last_t.map_or(0.0, |t| (s.t_s - t).clamp(0.0, 0.01));
         let own = carry.update(
-            s.u_valve.map(|u| operating_region(u, band)),
+            s.u_valve.map(|_| m.region()),
             [st.detect_internal_lpm, st.detect_external_lpm],
             (st.evidence_weight as f64 * dt / fast_s).min(1.0),
         );
@@ -137,16 +136,16 @@ pub fn run_pieces(
             if let Some(d) = det {
                 let d = (d as f64).abs();
                 r.detect_max_lpm[k] = r.detect_max_lpm[k].max(d);
-                if let Some(u) = s.u_valve {
-                    let m = &mut r.detect_region_max_lpm[k][operating_region(u, band)];
+                if s.u_valve.is_some() {
+                    let m = &mut r.detect_region_max_lpm[k][m.region()];
                     *m = m.max(own[k]);
                 }
             }
         }
-        if let (Some([.., both]), Some(u)) = (m.filter_states(), s.u_valve) {
+        if let (Some([.., both]), Some(_)) = (m.filter_states(), s.u_valve) {
             // The leak states are in l/min at 10 bar (LEAK_UNIT).
             let leak = |v: Option<f64>| v.unwrap_or(0.0);
-            let acc = &mut r.region_sums[operating_region(u, band)];
+            let acc = &mut r.region_sums[m.region()];
             acc[0] += w * dt * leak(both.leak_internal);
             acc[1] += w * dt * leak(both.leak_external);
             acc[2] += w * dt;
