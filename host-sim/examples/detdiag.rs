@@ -90,7 +90,7 @@ fn main() -> anyhow::Result<()> {
             .map(std::io::BufWriter::new);
         if let Some(w) = tw.as_mut() {
             use std::io::Write;
-            writeln!(w, "t,q_int,q_ext,w,det_i,det_e,sd_i,sd_e,li,le,pH,pI,pE,pB,verdict,p3,p4,u,th_i,th_e,lam,g_ext,g_ret,thI_i,thE_e,v_true,lvl_i,lvl_e,health,vgd_e,vgd_r")?;
+            writeln!(w, "t,q_int,q_ext,w,det_i,det_e,sd_i,sd_e,li,le,pH,pI,pE,pB,verdict,p3,p4,u,th_i,th_e,lam,g_ext,g_ret,thI_i,thE_e,v_true,lvl_i,lvl_e,health,vgd_e,vgd_r,v_healthy,v_both,region")?;
         }
         let mut i = 0u64;
         while let Some((s, truth)) = rd.next_row()? {
@@ -117,12 +117,16 @@ fn main() -> anyhow::Result<()> {
                             f[2].x[9],
                         )
                     });
+            // Estimated piston speeds (healthy, both filters), m/s.
+            let vel = m
+                .filter_states()
+                .map_or([f32::NAN; 2], |f| [f[0].x[1] * 0.1, f[3].x[1] * 0.1]);
             if let Some(w) = tw.as_mut() {
                 if i.is_multiple_of(10) {
                     use std::io::Write;
                     writeln!(
                         w,
-                        "{:.3},{:.3},{:.3},{:.3},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{},{:.2},{:.2},{:.3},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:#x},{:.4},{:.4}",
+                        "{:.3},{:.3},{:.3},{:.3},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{},{:.2},{:.2},{:.3},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:#x},{:.4},{:.4},{:.5},{:.5},{}",
                         s.t_s,
                         truth[0],
                         truth[1],
@@ -138,7 +142,7 @@ fn main() -> anyhow::Result<()> {
                         p[2],
                         p[3],
                         st.verdict.name(),
-                        fs.0, fs.1, s.u_valve.unwrap_or(f32::NAN), fs.2, fs.3, fs.4, fs.5, fs.6, fs.7, fs.8, truth[2], st.alarm_level_lpm[0], st.alarm_level_lpm[1], st.health, st.valve_gain_deviation[0], st.valve_gain_deviation[1]
+                        fs.0, fs.1, s.u_valve.unwrap_or(f32::NAN), fs.2, fs.3, fs.4, fs.5, fs.6, fs.7, fs.8, truth[2], st.alarm_level_lpm[0], st.alarm_level_lpm[1], st.health, st.valve_gain_deviation[0], st.valve_gain_deviation[1], vel[0], vel[1], m.region()
                     )?;
                 }
             }
