@@ -127,16 +127,19 @@ const WARNING_RELEASE: f64 = 0.8;
 /// Valve flow-gain deviation (relative; the root sum of squares of the
 /// extend and retract gains') beyond which the `both` filter's valve no
 /// longer describes the installation. Valves differ by ±5–10 % and
-/// calibration fits the installation's; a filter that needs ±50 % makes
+/// calibration fits the installation's; a filter that needs ±40 % makes
 /// up with the gain for a valve model that is wrong where the valve now
 /// works (a dead zone or edge it was not calibrated on), and its leak
 /// states take the rest of that error. On
 /// development rig 1 (100 bar, 40 °C, valve kept by a partial
 /// calibration) the retract gain stood at +78 … +136 % when both
-/// healthy runs raised internal-leak alarms in slow retractions. Such
+/// healthy runs raised internal-leak alarms in slow retractions; on
+/// survey rig 38 (100 bar, 25 °C) the extend gain at +45 … +54 % when a
+/// healthy run did in a steady extension (the limit was 50 %). Such
 /// samples count as no evidence — no alarm, no `healthy` — like suspect
-/// readings (figures: docs/evaluation.md).
-pub const VALVE_GAIN_MISFIT: f64 = 0.5;
+/// readings (figures: docs/evaluation.md; 30 % raised a further rig's
+/// long hold to an alarm).
+pub const VALVE_GAIN_MISFIT: f64 = 0.4;
 /// Cap of the evidence-time counter, s: it only has to reach
 /// `min_evidence_s`.
 const EVIDENCE_CAP_S: f64 = 1.0e4;
@@ -1169,23 +1172,35 @@ mod tests {
         assert!(d.latched().is_empty());
     }
 
+    /// 10 s of `both`-filter outputs with valve gains `gain` (relative:
+    /// extend, retract) reading `lpm` of internal leak: (alarm raised,
+    /// conclusive).
+    fn run_with_valve_gains(gain: [f64; 2], lpm: f64) -> (bool, bool) {
+        let mut d: Decision<f64> = Decision::new(&Params::nominal());
+        let mut events = Events::new();
+        let mut out = outputs(lpm);
+        for o in out.iter_mut().flatten() {
+            o.valve_gain = gain;
+        }
+        for i in 0..10_000 {
+            let t = i as f64 * 0.001;
+            d.update(&out, facts(0.001, 1.0, true, 2, t), &mut events);
+        }
+        (!d.latched().is_empty(), d.conclusive())
+    }
+
+    #[test]
+    fn a_valve_gain_45_percent_off_the_calibrated_valve_backs_no_leak() {
+        // Survey rig 38 (100 bar, 25 °C), a healthy run: in a steady
+        // extension the `both` filter's extend gain stood 45–54 % off the
+        // fitted valve (retract −11 %) and its internal leak state took
+        // the rest of the misfit, 2.6 l/min at 10 bar: an alarm.
+        assert_eq!(run_with_valve_gains([0.45, -0.11], 1.0), (false, false));
+    }
+
     #[test]
     fn a_valve_gain_beyond_the_misfit_limit_is_no_evidence_of_a_leak_nor_of_health() {
-        // 10 s of `both`-filter outputs with valve gains `gain` (relative)
-        // reading `lpm` of internal leak: (alarm raised, conclusive).
-        let run = |gain: f64, lpm: f64| {
-            let mut d: Decision<f64> = Decision::new(&Params::nominal());
-            let mut events = Events::new();
-            let mut out = outputs(lpm);
-            for o in out.iter_mut().flatten() {
-                o.valve_gain = [0.02, gain];
-            }
-            for i in 0..10_000 {
-                let t = i as f64 * 0.001;
-                d.update(&out, facts(0.001, 1.0, true, 2, t), &mut events);
-            }
-            (!d.latched().is_empty(), d.conclusive())
-        };
+        let run = |gain: f64, lpm: f64| run_with_valve_gains([0.02, gain], lpm);
         // Within the limit, either way: a leak reading alarms, a clean one
         // is conclusive.
         let within = 0.8 * VALVE_GAIN_MISFIT;
