@@ -75,29 +75,42 @@ python3 scripts/compare-recording.py "$expected" "$work/both.csv.gz" ||
   fail "the recording differs from what the monitor stepped"
 qemu_serial_cleanup
 
-STEP=upload
-port=$(qemu_serial_free_port)
-QEMU_ICOUNT=shift=0,sleep=on qemu_serial_start "$upload_elf" "$port"
-echo "qemu-link-e2e: upload to $(basename "$upload_elf") on 127.0.0.1:$port"
-"$host_sim" params show "tcp:127.0.0.1:$port" >"$work/running.toml" || fail "host-sim params show"
-grep -q '^force_offset_n = 0.0$' "$work/running.toml" || fail "no force_offset_n = 0.0 in the running set"
-"$host_sim" record "tcp:127.0.0.1:$port" -o "$work/site.csv.gz" --duration 4 ||
-  fail "host-sim record"
-sed 's/^force_offset_n = 0.0$/force_offset_n = 5.0/' "$work/running.toml" >"$work/site.toml"
-"$host_sim" params upload "tcp:127.0.0.1:$port" "$work/site.toml" | tee "$work/upload.txt" ||
-  fail "host-sim params upload"
-"$host_sim" events "tcp:127.0.0.1:$port" | tee "$work/events-after.txt" || fail "host-sim events"
-status=0
-qemu_serial_wait 300 || status=$?
-grep -E 'parameter set|LM_Identity' "$QEMU_SERIAL_OUT" || true
-[ "$status" = 0 ] || fail "the firmware's identity check in QEMU (status $status)"
-# host-sim: "… version V crc C …"; the firmware: "after it version V crc C".
-said=$(grep -oE 'version [0-9]+ crc [0-9a-f]{8}' "$work/upload.txt" | head -n 1)
-sent=$(grep -oE 'after it version [0-9]+ crc [0-9a-f]{8}' "$QEMU_SERIAL_OUT" | sed 's/^after it //')
-[ -n "$said" ] && [ "$said" = "$sent" ] ||
-  fail "host-sim says the active set is '$said', LM_Identity carries '$sent'"
-echo "qemu-link-e2e: LM_Identity carries the uploaded set ($sent)"
-grep -qF "parameters changed: $sent" "$work/events-after.txt" ||
-  fail "no 'parameters changed: $sent' in the event memory"
+# The upload step's timing hangs on the host's clock (QEMU_ICOUNT
+# sleep=on): on a loaded machine it has failed once in many runs. It runs
+# again once; a real fault fails both times (the first run's QEMU output,
+# with the relay's changes, is printed either way).
+upload_step() {
+  STEP=upload
+  port=$(qemu_serial_free_port)
+  QEMU_ICOUNT=shift=0,sleep=on qemu_serial_start "$upload_elf" "$port"
+  echo "qemu-link-e2e: upload to $(basename "$upload_elf") on 127.0.0.1:$port"
+  "$host_sim" params show "tcp:127.0.0.1:$port" >"$work/running.toml" || fail "host-sim params show"
+  grep -q '^force_offset_n = 0.0$' "$work/running.toml" || fail "no force_offset_n = 0.0 in the running set"
+  "$host_sim" record "tcp:127.0.0.1:$port" -o "$work/site.csv.gz" --duration 4 ||
+    fail "host-sim record"
+  sed 's/^force_offset_n = 0.0$/force_offset_n = 5.0/' "$work/running.toml" >"$work/site.toml"
+  "$host_sim" params upload "tcp:127.0.0.1:$port" "$work/site.toml" | tee "$work/upload.txt" ||
+    fail "host-sim params upload"
+  "$host_sim" events "tcp:127.0.0.1:$port" | tee "$work/events-after.txt" || fail "host-sim events"
+  status=0
+  qemu_serial_wait 300 || status=$?
+  grep -E 'parameter set|LM_Identity' "$QEMU_SERIAL_OUT" || true
+  [ "$status" = 0 ] || fail "the firmware's identity check in QEMU (status $status)"
+  # host-sim: "… version V crc C …"; the firmware: "after it version V crc C".
+  said=$(grep -oE 'version [0-9]+ crc [0-9a-f]{8}' "$work/upload.txt" | head -n 1)
+  sent=$(grep -oE 'after it version [0-9]+ crc [0-9a-f]{8}' "$QEMU_SERIAL_OUT" | sed 's/^after it //')
+  [ -n "$said" ] && [ "$said" = "$sent" ] ||
+    fail "host-sim says the active set is '$said', LM_Identity carries '$sent'"
+  echo "qemu-link-e2e: LM_Identity carries the uploaded set ($sent)"
+  grep -qF "parameters changed: $sent" "$work/events-after.txt" ||
+    fail "no 'parameters changed: $sent' in the event memory"
+}
+# In the background so that `set -e` holds inside it.
+upload_step &
+if ! wait $!; then
+  echo "qemu-link-e2e: the upload step failed; running it once more" >&2
+  upload_step &
+  wait $! || exit 1
+fi
 rm -rf "$work"
 echo "qemu-link-e2e: all checks passed"

@@ -307,6 +307,22 @@ pub async fn upload_checker(before: IdentityFrame) {
                 relay_dropped,
                 if ok { "" } else { " (FAILED)" }
             );
+            if !ok {
+                // What the relay did around the switch, for the failure's cause.
+                record::with(|log| {
+                    for c in log.relay.iter() {
+                        println!(
+                            "LM_Identity: relay {} at {} ms (sample {:?}); last old identity at {} ms, first new at {} ms; overruns {}",
+                            if c.energised { "on" } else { "off" },
+                            c.at.as_millis(),
+                            log.sample_at(c.at),
+                            last_old.as_millis(),
+                            first_new.as_millis(),
+                            log.overruns
+                        );
+                    }
+                });
+            }
             ok
         }
         Switch::Wrong(why) => {
