@@ -79,7 +79,8 @@ pub struct PistonSpeed<T> {
     /// The position reading smoothed over `POSITION_SMOOTHING_S`, m.
     smoothed_m: Option<T>,
     /// `smoothed_m` less its lag over `SPEED_WINDOW_S`, m (kept as the
-    /// difference: tenths of a millimetre on a stroke of metres).
+    /// difference: hundredths of a millimetre on a position of tenths of a
+    /// metre).
     lead_m: T,
 }
 
