@@ -91,8 +91,11 @@ pub fn run_pieces(
     for s in pieces.iter().flat_map(|piece| piece.iter()) {
         let st = m.step(s);
         let dt = last_t.map_or(0.0, |t| (s.t_s - t).clamp(0.0, 0.01));
+        // The monitor's operating region of this sample (none without a
+        // valve command).
+        let region = s.u_valve.map(|_| m.region());
         let own = carry.update(
-            s.u_valve.map(|_| m.region()),
+            region,
             [st.detect_internal_lpm, st.detect_external_lpm],
             (st.evidence_weight as f64 * dt / fast_s).min(1.0),
         );
@@ -136,16 +139,16 @@ pub fn run_pieces(
             if let Some(d) = det {
                 let d = (d as f64).abs();
                 r.detect_max_lpm[k] = r.detect_max_lpm[k].max(d);
-                if s.u_valve.is_some() {
-                    let m = &mut r.detect_region_max_lpm[k][m.region()];
+                if let Some(region) = region {
+                    let m = &mut r.detect_region_max_lpm[k][region];
                     *m = m.max(own[k]);
                 }
             }
         }
-        if let (Some([.., both]), Some(_)) = (m.filter_states(), s.u_valve) {
+        if let (Some([.., both]), Some(region)) = (m.filter_states(), region) {
             // The leak states are in l/min at 10 bar (LEAK_UNIT).
             let leak = |v: Option<f64>| v.unwrap_or(0.0);
-            let acc = &mut r.region_sums[m.region()];
+            let acc = &mut r.region_sums[region];
             acc[0] += w * dt * leak(both.leak_internal);
             acc[1] += w * dt * leak(both.leak_external);
             acc[2] += w * dt;
