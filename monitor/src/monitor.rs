@@ -306,6 +306,7 @@ impl<T: Real> Monitor<T> {
                 u_valve,
                 laminar_factor: self.laminar_factor,
                 land: self.plant.land_leak(u_valve),
+                rod: self.plant.rod_edges(u_valve),
             },
             step: Step {
                 dt: T::c(dt),

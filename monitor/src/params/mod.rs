@@ -164,6 +164,18 @@ params_struct! {
         /// Flow gain of the P→B edge relative to the A→T edge.
         pub rod_edge_gain_retract: f64 = 1.0,
             in (0.2 ..= 5.0, ""),
+        /// How much later the B→T edge opens than the P→A edge, fraction of
+        /// travel (negative: earlier). A valve whose edges differ in overlap,
+        /// or pass laminar land leakage beside the opening, meters a
+        /// different share through each side at small and large openings;
+        /// one gain ratio fits only the openings calibration saw. Fitted by
+        /// calibration.
+        pub rod_edge_offset_extend: f64 = 0.0,
+            in (-0.05 ..= 0.05, ""),
+        /// How much later the P→B edge opens than the A→T edge, fraction of
+        /// travel (negative: earlier).
+        pub rod_edge_offset_retract: f64 = 0.0,
+            in (-0.05 ..= 0.05, ""),
         /// Laminar leakage across each of the four covered metering edges
         /// (P→A, A→T, P→B, B→T), l/min per bar. The thesis' per-edge values
         /// of §6.3.1.2 give litres per minute at rest (erratum 2); its

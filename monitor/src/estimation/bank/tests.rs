@@ -52,6 +52,7 @@ fn at_point<T: Real>((u, s0): (f64, [f64; NX])) -> Setting<T> {
             u_valve: T::c(u),
             laminar_factor: T::ONE,
             land: plant.land_leak(T::c(u)),
+            rod: plant.rod_edges(T::c(u)),
         },
         step: Step {
             dt: T::c(0.001),

@@ -82,7 +82,29 @@ pub struct Inputs<T> {
     /// The covered edges' land leakage at this command
     /// ([`Plant::land_leak`]).
     pub land: LandLeak<T>,
+    /// The rod-side edges' metering at this command
+    /// ([`Plant::rod_edges`]).
+    pub rod: RodEdges<T>,
 }
+
+/// Flow of each direction's rod-side metering edge (B→T extending, P→B
+/// retracting) per unit of its piston-side edge's (P→A, A→T) at one
+/// command: the calibrated gain ratio times the ratio of the two edges'
+/// openings, which differ when one edge opens later
+/// (`valve.rod_edge_offset_*`). Taken at the commanded spool, like the land
+/// leakage, once a sample for every filter.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RodEdges<T> {
+    /// B→T per P→A.
+    pub extend: T,
+    /// P→B per A→T.
+    pub retract: T,
+}
+
+/// Largest ratio of a rod-side edge's opening to its piston-side edge's
+/// ([`Plant::rod_edges`]): where the rod side opens first, the ratio grows
+/// without bound as the piston side closes, while both flows vanish.
+pub const MAX_ROD_OPENING_RATIO: f64 = 4.0;
 
 /// Each covered metering edge's land leakage relative to
 /// `valve.edge_leak_lpm_per_bar`, at one spool position: a laminar
@@ -156,6 +178,8 @@ pub struct Plant<T> {
     kv_ret: T,
     rod_edge_ext: T,
     rod_edge_ret: T,
+    rod_offset_ext: T,
+    rod_offset_ret: T,
     k_ext_base: T,
     dead_zone: T,
     null_offset: T,
@@ -200,6 +224,8 @@ impl<T: Real> Plant<T> {
             kv_ret: T::c(kv(v.flow_gain_retract_lpm_sqrt_bar)),
             rod_edge_ext: T::c(v.rod_edge_gain_extend),
             rod_edge_ret: T::c(v.rod_edge_gain_retract),
+            rod_offset_ext: T::c(v.rod_edge_offset_extend),
+            rod_offset_ret: T::c(v.rod_edge_offset_retract),
             k_ext_base: T::c(lam(params.leakage.external_lpm_per_bar)),
             dead_zone: T::c(v.dead_zone),
             null_offset: T::c(v.null_offset),
@@ -253,6 +279,38 @@ impl<T: Real> Plant<T> {
             at: c.at * shrink,
             pb: c.pb * shrink,
             bt: c.bt * grow,
+        }
+    }
+
+    /// The rod-side edges' metering relative to the piston-side edges' at
+    /// valve command `u_valve` ([`RodEdges`]). Only the direction the
+    /// command opens has a ratio of openings; the closed direction keeps
+    /// its gain ratio (its flows are zero, or nearly, whatever the ratio).
+    #[inline]
+    pub fn rod_edges(&self, u_valve: T) -> RodEdges<T> {
+        let x = self.spool_command(u_valve);
+        let (travel, offset) = if x >= T::ZERO {
+            (x, self.rod_offset_ext)
+        } else {
+            (-x, self.rod_offset_ret)
+        };
+        let (piston, _) = opening(travel - self.dead_zone, self.open_eps);
+        // a − offset over a, exactly 1 when the edges open together.
+        let ratio = if piston > T::ZERO {
+            ((piston - offset).max(T::ZERO) / piston).min(T::c(MAX_ROD_OPENING_RATIO))
+        } else {
+            T::ONE
+        };
+        if x >= T::ZERO {
+            RodEdges {
+                extend: self.rod_edge_ext * ratio,
+                retract: self.rod_edge_ret,
+            }
+        } else {
+            RodEdges {
+                extend: self.rod_edge_ext,
+                retract: self.rod_edge_ret * ratio,
+            }
         }
     }
 
@@ -337,8 +395,8 @@ impl<T: Real> Plant<T> {
         // Metering flows of each direction (into A, into B).
         // The rod-side edges (B→T, P→B) may pass a little more or less than
         // the piston-side edges of the same direction (calibrated ratios).
-        let kv_ext_b = kv_ext * self.rod_edge_ext;
-        let kv_ret_b = kv_ret * self.rod_edge_ret;
+        let kv_ext_b = kv_ext * u.rod.extend;
+        let kv_ret_b = kv_ret * u.rod.retract;
         let ext_a = kv_ext * a_pos * g_pa;
         let ext_b = -(kv_ext_b * a_pos * g_bt);
         let ret_a = -(kv_ret * a_neg * g_at);

@@ -63,6 +63,7 @@ fn inputs(p: &Plant<f64>, u: f64) -> Inputs<f64> {
         u_valve: u,
         laminar_factor: 1.0,
         land: p.land_leak(u),
+        rod: p.rod_edges(u),
     }
 }
 
@@ -401,4 +402,57 @@ fn friction_opposes_motion_and_has_breakaway_peak() {
     assert_eq!(f_neg, -f_slow);
     // Viscous term dominates at speed: 480 + 5000·0.3 plus a decayed Stribeck part.
     assert!(f_fast > 1980.0 && f_fast < 2100.0, "{f_fast}");
+}
+
+#[test]
+fn a_rod_side_edge_that_opens_later_passes_less_at_small_openings() {
+    let mut params = Params::nominal();
+    params.valve.rod_edge_gain_extend = 1.05;
+    params.valve.rod_edge_gain_retract = 0.95;
+    let even = Plant::<f64>::new(&params);
+    let dz = params.valve.dead_zone;
+    let null = params.valve.null_offset;
+    // Edges opening together: the gain ratio, bit for bit, in both
+    // directions and at rest.
+    for u in [-0.3, -0.05, 0.0, 0.05, 0.3] {
+        let r = even.rod_edges(u);
+        assert_eq!((r.extend, r.retract), (1.05, 0.95), "u = {u}");
+    }
+    params.valve.rod_edge_offset_extend = 0.01;
+    params.valve.rod_edge_offset_retract = -0.01;
+    let later = Plant::<f64>::new(&params);
+    // Extending at an opening a past the piston-side edge: (a − 0.01)/a.
+    for a in [0.02, 0.05, 0.2] {
+        let r = later.rod_edges(dz + a - null);
+        assert!(
+            (r.extend - 1.05 * (a - 0.01) / a).abs() < 1e-12,
+            "{a}: {r:?}"
+        );
+        assert_eq!(r.retract, 0.95, "the closed direction keeps its ratio");
+    }
+    // Not yet open on the rod side: nothing through it.
+    assert_eq!(later.rod_edges(dz + 0.005 - null).extend, 0.0);
+    // Retracting, the rod side opens first: more, up to the bound.
+    let a = 0.04;
+    let r = later.rod_edges(-(dz + a) - null);
+    assert!((r.retract - 0.95 * (a + 0.01) / a).abs() < 1e-12, "{r:?}");
+    let r = later.rod_edges(-(dz + 0.0025) - null);
+    assert!(
+        (r.retract - 0.95 * MAX_ROD_OPENING_RATIO).abs() < 1e-12,
+        "{r:?}"
+    );
+    // The model meters the rod side by it: B's flow while extending
+    // scales with the ratio, A's does not.
+    let u = dz + 0.02 - null;
+    let s = state(0.09, 0.01, u + null, 40.0, 20.0);
+    let flows = |p: &Plant<f64>| {
+        let e = p.eval(&s, &inputs(p, u), Nuisance::default(), Leaks::default());
+        (e.f[P3], e.f[P4])
+    };
+    let ((a_even, b_even), (a_later, b_later)) = (flows(&even), flows(&later));
+    assert_eq!(a_even, a_later);
+    assert!(
+        b_later > b_even,
+        "less flows out of B: {b_even} → {b_later}"
+    );
 }
