@@ -242,13 +242,19 @@ pub fn fit_valve(
             ));
             continue;
         }
-        let ratio = ratio_fit(
-            &b_pts
-                .iter()
-                .map(|(u, y)| (u - edge, *y))
-                .collect::<Vec<_>>(),
-        )
-        .map(|(k, _)| k / b);
+        // The rod side's own line where the moves span speeds enough to
+        // place edges; else its ratio through the piston side's edge.
+        let own = r2.and_then(|_| rod_side_line(b_pts, b, edge));
+        let ratio = own.map(|(k, _)| k).or_else(|| {
+            ratio_fit(
+                &b_pts
+                    .iter()
+                    .map(|(u, y)| (u - edge, *y))
+                    .collect::<Vec<_>>(),
+            )
+            .map(|(k, _)| k / b)
+        });
+        let offset = own.map_or(0.0, |(_, o)| o);
         if dir == 0 {
             p.valve.flow_gain_extend_lpm_sqrt_bar = kv_lpm;
         } else {
@@ -275,13 +281,23 @@ pub fn fit_valve(
             Some(k) if k > 0.8 && k < 1.25 => {
                 if dir == 0 {
                     p.valve.rod_edge_gain_extend = k;
+                    p.valve.rod_edge_offset_extend = offset;
                 } else {
                     p.valve.rod_edge_gain_retract = k;
+                    p.valve.rod_edge_offset_retract = offset;
                 }
                 fits.push(Fit {
                     what: format!("rod/piston-side edge ratio, {short}"),
-                    value: format!("{k:.4}"),
-                    quality: format!("{} samples", b_pts.len()),
+                    value: format!("{k:.4}, rod-side edge {offset:+.4} of travel later"),
+                    quality: format!(
+                        "{} samples{}",
+                        b_pts.len(),
+                        if own.is_some() {
+                            ", its own line"
+                        } else {
+                            ", through the piston side's edge"
+                        }
+                    ),
                 });
             }
             other => q.problems.push(format!(
@@ -662,6 +678,26 @@ impl EdgeHolds {
             .sum::<f64>();
         (skew, (sum_sq / (2.0 * self.rows.len() as f64)).sqrt())
     }
+}
+
+/// Largest |offset| between the two metering edges of one direction
+/// calibration accepts, fraction of travel. Overlaps differ by a few
+/// thousandths between edges; laminar land leakage beside an opening edge
+/// shifts its straight line by up to a few hundredths, but that leakage
+/// follows the pressure drop, not the opening, and a larger offset applied
+/// at openings the recording did not move at raised alarms before leaks
+/// started (development rig 2, further rig 25: docs/evaluation.md).
+pub const MAX_ROD_EDGE_OFFSET: f64 = 0.02;
+
+/// The rod-side edge's own straight line y = K_b·(u − edge_b), against the
+/// piston side's slope `k_piston` and edge `edge_piston`: (gain ratio
+/// K_b / K_piston, offset edge_b − edge_piston), or `None` when it is
+/// degenerate or implausible (the ratio outside 0.8–1.25, the offset
+/// beyond [`MAX_ROD_EDGE_OFFSET`]).
+fn rod_side_line(pts: &[(f64, f64)], k_piston: f64, edge_piston: f64) -> Option<(f64, f64)> {
+    let (a, b, _, _) = line_fit(pts)?;
+    let (ratio, offset) = (b / k_piston, -a / b - edge_piston);
+    (ratio > 0.8 && ratio < 1.25 && offset.abs() <= MAX_ROD_EDGE_OFFSET).then_some((ratio, offset))
 }
 
 /// How [`fit_edge_leak`] chooses the land leakage's growth rate

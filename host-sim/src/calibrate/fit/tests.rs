@@ -4,10 +4,11 @@ use super::*;
 use monitor::Sample;
 
 /// Steady samples of a valve with flow gains `gain` × the nominal ones
-/// and its edges at the nominal dead zone and null, both chambers'
-/// pressures rising at `rate_bar_s` ≠ 0 (the piston speed is what continuity
-/// leaves of the metering flow after the oil's compression).
-fn samples(p: &Params, gain: f64, rate_bar_s: f64) -> Prepared {
+/// and its piston-side edges at the nominal dead zone and null, the
+/// rod-side edges `rod_offset` of travel later, both chambers' pressures
+/// rising at `rate_bar_s` ≠ 0 (the piston speed is what continuity leaves
+/// of the metering flow after the oil's compression).
+fn samples(p: &Params, gain: f64, rate_bar_s: f64, rod_offset: f64) -> Prepared {
     let c = &p.cylinder;
     let to_si = 1.0 / LPM_PER_M3S / BAR.sqrt();
     let kv = [
@@ -41,13 +42,15 @@ fn samples(p: &Params, gain: f64, rate_bar_s: f64) -> Prepared {
             c.dead_volume_rod_m3 + c.rod_side_area_m2 * (c.stroke_m - x),
             p4,
         );
-        // Metering flows into A and B (the rod-side edge at ratio 1).
+        // Metering flows into A and B (the rod-side edge at gain ratio 1).
         let (u, q_a, q_b) = if extend {
             let m = kv[0] * (opening - edges[0]);
-            (opening, m * g(p2 - p3), -m * g(p4 - p5))
+            let m_b = kv[0] * (opening - edges[0] - rod_offset);
+            (opening, m * g(p2 - p3), -m_b * g(p4 - p5))
         } else {
             let m = kv[1] * (opening - edges[1]);
-            (-opening, -m * g(p3 - p5), m * g(p2 - p4))
+            let m_b = kv[1] * (opening - edges[1] - rod_offset);
+            (-opening, -m * g(p3 - p5), m_b * g(p2 - p4))
         };
         // Chamber A's continuity gives the speed; B's pressure rate is
         // what B's continuity then needs (the same rate, up to the edges'
@@ -83,7 +86,7 @@ fn fitted_gain(d: &Prepared, start: &Params) -> f64 {
 fn the_valve_fit_counts_the_oil_compressed_while_the_pressures_move() {
     let p = Params::nominal();
     // Pressures rising at 10 bar/s (FLOWING allows 2 bar in 180 ms).
-    let rising = samples(&p, 1.05, 10.0);
+    let rising = samples(&p, 1.05, 10.0, 0.0);
     let corrected = fitted_gain(&rising, &p);
     assert!((corrected - 1.05).abs() < 1e-4, "{corrected}");
     // Read as steady flow, the same samples give another gain.
@@ -92,6 +95,51 @@ fn the_valve_fit_counts_the_oil_compressed_while_the_pressures_move() {
     as_steady.dp4.iter_mut().for_each(|r| *r = 0.0);
     let uncorrected = fitted_gain(&as_steady, &p);
     assert!((uncorrected - 1.05).abs() > 1e-3, "{uncorrected}");
+}
+
+#[test]
+fn a_rod_side_edge_that_opens_later_is_fitted_as_an_offset_not_a_gain() {
+    let p = Params::nominal();
+    for offset in [0.012, -0.008] {
+        let d = samples(&p, 1.0, 10.0, offset);
+        let (mut fitted, mut fits, mut warnings, mut q) =
+            (p.clone(), Vec::new(), Vec::new(), Quality::default());
+        fit_valve(&d, &mut fitted, &mut fits, &mut warnings, &mut q);
+        assert!(q.problems.is_empty(), "{:?}", q.problems);
+        let v = &fitted.valve;
+        for (ratio, off) in [
+            (v.rod_edge_gain_extend, v.rod_edge_offset_extend),
+            (v.rod_edge_gain_retract, v.rod_edge_offset_retract),
+        ] {
+            assert!((ratio - 1.0).abs() < 1e-3, "{offset}: ratio {ratio}");
+            assert!((off - offset).abs() < 2e-4, "{offset}: offset {off}");
+        }
+    }
+    // Beyond the plausible offset: no offset, the gain ratio through the
+    // piston side's edge (which takes up part of the late edge).
+    let d = samples(&p, 1.0, 10.0, 1.5 * MAX_ROD_EDGE_OFFSET);
+    let (mut fitted, mut fits, mut warnings, mut q) =
+        (p.clone(), Vec::new(), Vec::new(), Quality::default());
+    fit_valve(&d, &mut fitted, &mut fits, &mut warnings, &mut q);
+    let v = &fitted.valve;
+    assert_eq!(v.rod_edge_offset_extend, 0.0);
+    assert!(v.rod_edge_gain_extend < 0.95, "{}", v.rod_edge_gain_extend);
+}
+
+#[test]
+fn a_rod_side_line_beyond_the_plausible_offset_is_not_used() {
+    let line = |k: f64, edge: f64| -> Vec<(f64, f64)> {
+        (0..100)
+            .map(|i| {
+                let u = 0.05 + 0.003 * i as f64;
+                (u, k * (u - edge))
+            })
+            .collect()
+    };
+    let (ratio, offset) = rod_side_line(&line(0.95, 0.03), 1.0, 0.02).unwrap();
+    assert!((ratio - 0.95).abs() < 1e-9 && (offset - 0.01).abs() < 1e-9);
+    assert!(rod_side_line(&line(1.0, 0.02 + MAX_ROD_EDGE_OFFSET + 0.01), 1.0, 0.02).is_none());
+    assert!(rod_side_line(&line(1.4, 0.02), 1.0, 0.02).is_none());
 }
 
 /// A 1 kHz recording of `ms` samples at 100 bar supply and 1 bar tank,
