@@ -289,28 +289,30 @@ impl<T: Real> Plant<T> {
     #[inline]
     pub fn rod_edges(&self, u_valve: T) -> RodEdges<T> {
         let x = self.spool_command(u_valve);
-        let (travel, offset) = if x >= T::ZERO {
-            (x, self.rod_offset_ext)
-        } else {
-            (-x, self.rod_offset_ret)
-        };
-        let (piston, _) = opening(travel - self.dead_zone, self.open_eps);
-        // a − offset over a, exactly 1 when the edges open together.
-        let ratio = if piston > T::ZERO {
-            ((piston - offset).max(T::ZERO) / piston).min(T::c(MAX_ROD_OPENING_RATIO))
-        } else {
-            T::ONE
-        };
         if x >= T::ZERO {
             RodEdges {
-                extend: self.rod_edge_ext * ratio,
+                extend: self.rod_edge_ext * self.opening_ratio(x, self.rod_offset_ext),
                 retract: self.rod_edge_ret,
             }
         } else {
             RodEdges {
                 extend: self.rod_edge_ext,
-                retract: self.rod_edge_ret * ratio,
+                retract: self.rod_edge_ret * self.opening_ratio(-x, self.rod_offset_ret),
             }
+        }
+    }
+
+    /// The rod-side edge's opening per the piston-side edge's at spool
+    /// `travel` toward them, the rod side opening `offset` later: a − offset
+    /// over a (exactly 1 when the edges open together), at most
+    /// [`MAX_ROD_OPENING_RATIO`]; 1 while the piston side is closed.
+    #[inline(always)]
+    fn opening_ratio(&self, travel: T, offset: T) -> T {
+        let (piston, _) = opening(travel - self.dead_zone, self.open_eps);
+        if piston > T::ZERO {
+            ((piston - offset).max(T::ZERO) / piston).min(T::c(MAX_ROD_OPENING_RATIO))
+        } else {
+            T::ONE
         }
     }
 
@@ -393,8 +395,9 @@ impl<T: Real> Plant<T> {
         let kv_ext = self.kv_ext * (T::ONE + nuis.gain_extend * gref);
         let kv_ret = self.kv_ret * (T::ONE + nuis.gain_retract * gref);
         // Metering flows of each direction (into A, into B).
-        // The rod-side edges (B→T, P→B) may pass a little more or less than
-        // the piston-side edges of the same direction (calibrated ratios).
+        // The rod-side edges (B→T, P→B) may pass more or less than the
+        // piston-side edges of the same direction: the calibrated gain
+        // ratios times the openings' ratio at this command (`Inputs::rod`).
         let kv_ext_b = kv_ext * u.rod.extend;
         let kv_ret_b = kv_ret * u.rod.retract;
         let ext_a = kv_ext * a_pos * g_pa;
