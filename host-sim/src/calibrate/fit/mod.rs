@@ -278,7 +278,7 @@ pub fn fit_valve(
             ),
         });
         match ratio {
-            Some(k) if k > 0.8 && k < 1.25 => {
+            Some(k) if plausible_rod_ratio(k) => {
                 if dir == 0 {
                     p.valve.rod_edge_gain_extend = k;
                     p.valve.rod_edge_offset_extend = offset;
@@ -301,8 +301,10 @@ pub fn fit_valve(
                 });
             }
             other => q.problems.push(format!(
-                "valve {name}: rod-side/piston-side edge ratio {} implausible (0.8–1.25 expected)",
-                other.map_or("undetermined".into(), |k| format!("{k:.3}"))
+                "valve {name}: rod-side/piston-side edge ratio {} implausible ({}–{} expected)",
+                other.map_or("undetermined".into(), |k| format!("{k:.3}")),
+                ROD_EDGE_RATIO.0,
+                ROD_EDGE_RATIO.1,
             )),
         }
     }
@@ -689,15 +691,23 @@ impl EdgeHolds {
 /// started (development rig 2, further rig 25: docs/evaluation.md).
 pub const MAX_ROD_EDGE_OFFSET: f64 = 0.02;
 
+/// Plausible rod-side/piston-side flow gain ratios of one direction
+/// (exclusive bounds).
+const ROD_EDGE_RATIO: (f64, f64) = (0.8, 1.25);
+
+fn plausible_rod_ratio(k: f64) -> bool {
+    k > ROD_EDGE_RATIO.0 && k < ROD_EDGE_RATIO.1
+}
+
 /// The rod-side edge's own straight line y = K_b·(u − edge_b), against the
 /// piston side's slope `k_piston` and edge `edge_piston`: (gain ratio
 /// K_b / K_piston, offset edge_b − edge_piston), or `None` when it is
-/// degenerate or implausible (the ratio outside 0.8–1.25, the offset
-/// beyond [`MAX_ROD_EDGE_OFFSET`]).
+/// degenerate or implausible (the ratio outside [`ROD_EDGE_RATIO`], the
+/// offset beyond [`MAX_ROD_EDGE_OFFSET`]).
 fn rod_side_line(pts: &[(f64, f64)], k_piston: f64, edge_piston: f64) -> Option<(f64, f64)> {
     let (a, b, _, _) = line_fit(pts)?;
     let (ratio, offset) = (b / k_piston, -a / b - edge_piston);
-    (ratio > 0.8 && ratio < 1.25 && offset.abs() <= MAX_ROD_EDGE_OFFSET).then_some((ratio, offset))
+    (plausible_rod_ratio(ratio) && offset.abs() <= MAX_ROD_EDGE_OFFSET).then_some((ratio, offset))
 }
 
 /// How [`fit_edge_leak`] chooses the land leakage's growth rate
