@@ -453,7 +453,8 @@ fn a_valve_read_back_that_changes_scale_is_never_taken_for_the_valve() {
 
 /// Share of the samples after the warm-up at which the monitor with
 /// `params` holds valve flow gains its valve model cannot describe; each
-/// such sample must count as no evidence.
+/// such sample (a valve whose gains were never learned within the limit)
+/// must count as no evidence.
 fn valve_misfit_share(samples: &[Sample], params: &Params) -> f64 {
     let mut m: Monitor<f32> = Monitor::new(params).expect("valid parameters");
     let (mut counted, mut misfit) = (0usize, 0usize);

@@ -3,7 +3,7 @@
 //! bit, on any IEEE-754 machine (see `real.rs`).
 
 use crate::decision::latch::AckOutcome;
-use crate::decision::{Decision, SampleFacts};
+use crate::decision::{Decision, SampleFacts, GAIN_SETTLED_SD};
 use crate::elapsed::{elapsed, exceeds, Window};
 use crate::estimation::bank::{
     external_index, internal_index, Bank, BankOutput, HypothesisFilter, Measurement, ProcessNoise,
@@ -372,6 +372,7 @@ impl<T: Real> Monitor<T> {
             observable: !pinned,
             region,
             t_s: sample.t_s,
+            valve_gains_learned: bank.valve_gains_learned(GAIN_SETTLED_SD),
         };
         flags |= self.decision.update(&ok, facts, &mut events);
         self.status(sample.t_s, checked.faulted, flags, events)

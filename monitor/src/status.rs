@@ -239,7 +239,9 @@ impl Status {
     /// The valve flow-gain deviations are beyond what the valve model
     /// describes ([`VALVE_GAIN_MISFIT`]): the monitor counts such samples
     /// as no evidence (`EVIDENCE_PAUSED`), neither of a leak nor of
-    /// health.
+    /// health — unless the gain that bent had been learned within the
+    /// limit first (a change such as a leak's onset, not a valve the model
+    /// never described; see `decision`).
     pub fn valve_model_misfit(&self) -> bool {
         crate::decision::valve_gains_misfit(self.valve_gain_deviation)
     }

@@ -195,6 +195,10 @@ fn step_into<T: Real, const N: usize>(
     *slot = filter.step(plant, ctx, q, m).ok();
 }
 
+fn sq(x: f64) -> f64 {
+    x * x
+}
+
 /// The four filters.
 #[derive(Clone, Debug)]
 pub struct Bank<T: Real> {
@@ -250,6 +254,14 @@ impl<T: Real> Bank<T> {
             Hypothesis::External => self.external = HypothesisFilter::new(h, s0, p0, leak_prior_sd),
             Hypothesis::Both => self.both = HypothesisFilter::new(h, s0, p0, leak_prior_sd),
         }
+    }
+
+    /// Has the `both` filter learned its valve flow gains (extend,
+    /// retract) to 1σ below `sd` (relative)?
+    pub fn valve_gains_learned(&self, sd: f64) -> [bool; 2] {
+        let var = T::c(sq(sd / crate::estimation::model::GAIN_REF));
+        let p = &self.both.ekf.p;
+        [p[(GAIN_EXT, GAIN_EXT)] < var, p[(GAIN_RET, GAIN_RET)] < var]
     }
 
     /// Plant state estimate of hypothesis `h`, scaled units.
