@@ -347,8 +347,6 @@ impl Floors {
         self.region[k].iter().copied().fold(0.0, f64::max)
     }
 
-    /// Into `p`'s baseline: the lowest region's floor everywhere, the
-    /// regions' above it.
     /// A direction whose quasi-steady moves spanned few speeds (command
     /// σ below [`NARROW_MOVE_SPREAD`]) says little of the openings the
     /// recording did not visit: its moves' floor, both leaks, is at least
@@ -369,6 +367,8 @@ impl Floors {
         covered
     }
 
+    /// Into `p`'s baseline: the lowest region's floor everywhere, the
+    /// regions' above it.
     fn set(&self, p: &mut Params) {
         let lowest = |k: usize| self.region[k].iter().copied().fold(f64::INFINITY, f64::min);
         let b = &mut p.baseline;

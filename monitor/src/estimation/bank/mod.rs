@@ -195,10 +195,6 @@ fn step_into<T: Real, const N: usize>(
     *slot = filter.step(plant, ctx, q, m).ok();
 }
 
-fn sq(x: f64) -> f64 {
-    x * x
-}
-
 /// The four filters.
 #[derive(Clone, Debug)]
 pub struct Bank<T: Real> {
@@ -259,7 +255,8 @@ impl<T: Real> Bank<T> {
     /// Has the `both` filter learned its valve flow gains (extend,
     /// retract) to 1σ below `sd` (relative)?
     pub fn valve_gains_learned(&self, sd: f64) -> [bool; 2] {
-        let var = T::c(sq(sd / crate::estimation::model::GAIN_REF));
+        let sd_scaled = sd / crate::estimation::model::GAIN_REF;
+        let var = T::c(sd_scaled * sd_scaled);
         let p = &self.both.ekf.p;
         [p[(GAIN_EXT, GAIN_EXT)] < var, p[(GAIN_RET, GAIN_RET)] < var]
     }

@@ -461,3 +461,17 @@ fn each_leak_filter_reports_its_own_leak_flow_and_only_both_the_valve_gains() {
         (0.0, 0.0, [0.0; 2])
     );
 }
+
+#[test]
+fn valve_gains_are_learned_only_once_their_sigma_is_below_the_threshold() {
+    // At the start each gain has the prior's σ (here 8 %): not learned to
+    // 1 %, learned to 10 %.
+    let p0: [f64; NB] = core::array::from_fn(|i| match i {
+        GAIN_EXT | GAIN_RET => (0.08 / crate::estimation::model::GAIN_REF).powi(2),
+        _ => 1e-3,
+    });
+    let s0 = [0.0; NX];
+    let bank = Bank::new(&s0, &p0, 0.1);
+    assert_eq!(bank.valve_gains_learned(0.01), [false, false]);
+    assert_eq!(bank.valve_gains_learned(0.1), [true, true]);
+}
