@@ -39,7 +39,10 @@ pub struct Run {
     pub evidence_fraction: f64,
     /// Fraction of the counted time at which the `both` filter's valve
     /// flow gains were beyond what the valve model describes
-    /// (`Status::valve_model_misfit`: no evidence there).
+    /// (`Status::valve_model_misfit`: no evidence there unless the gain
+    /// that bent had been learned within the limit first — the decision's
+    /// judgement, which `Status` does not carry; from a fresh start, as
+    /// here, the gains are rarely learned before they bend).
     pub valve_misfit_fraction: f64,
     /// Sensor-fault events and filter restarts (faults, gaps, numerical
     /// resets) over the whole run.

@@ -112,7 +112,7 @@ impl Calibration {
             );
             let _ = writeln!(
                 s,
-                "  evidence weight > 0.5 for {:.0} % of the time; valve flow gains more than {:.0} % off the fit (no evidence) for {:.0} %; alarms: {}",
+                "  evidence weight > 0.5 for {:.0} % of the time; valve flow gains more than {:.0} % off the fit (no evidence unless learned within it first) for {:.0} %; alarms: {}",
                 100.0 * v.evidence_fraction,
                 100.0 * VALVE_GAIN_MISFIT,
                 100.0 * v.valve_misfit_fraction,
