@@ -39,8 +39,10 @@
 //!    on the validation fit's part (it costs ten monitor runs); the refit
 //!    keeps its result.
 //! 4. **Healthy leakage**: the monitor runs with the fitted parameters; the
-//!    evidence-weighted mean leak coefficients of its `both` filter become
-//!    the installation's healthy seal and rod-side leakage.
+//!    evidence-weighted mean leak coefficients of its `both` filter at the
+//!    holds (over all regions if the holds had less than
+//!    `MIN_REGION_EVIDENCE_S` of evidence) become the installation's
+//!    healthy seal and rod-side leakage.
 //! 5. **Per-region baseline**: the monitor runs again; what the `both`
 //!    filter still reads, evidence-weighted per valve-command region
 //!    (retracting, holding, extending), becomes `[baseline]`, which the

@@ -6,6 +6,7 @@ use super::{
     HELD_LAMINAR_PRIOR, HELD_Q_LAMINAR, LENIENT_VALVE_R2, LENIENT_VALVE_RESIDUAL,
     MAX_FORCE_EXCESS_N, MAX_VALVE_RESIDUAL, MIN_REGION_EVIDENCE_S, MIN_VALVE_R2, REGIONS,
 };
+use monitor::params::HOLDING_REGION;
 use monitor::physics::units::{LEAK_UNIT, LPM_PER_M3S};
 use monitor::{Params, Sample};
 
@@ -442,8 +443,16 @@ fn leakage_and_baseline(samples: &[&[Sample]], mut p: Params) -> Result<LeakFit,
     let mut fits = Vec::new();
     let mut baseline_notes = Vec::new();
     let mut problems = Vec::new();
-    // 4. Healthy leakage: the model's own coefficients absorb the mean.
-    let mean = check::run_pieces(samples, &p, ALL)?.both_mean();
+    // 4. Healthy leakage: the model's own coefficients absorb the holds'
+    // mean.
+    let first = check::run_pieces(samples, &p, ALL)?;
+    let mean = first.healthy_leakage(MIN_REGION_EVIDENCE_S);
+    let hold_s = first.region_sums[HOLDING_REGION][2];
+    let over = if hold_s >= MIN_REGION_EVIDENCE_S {
+        format!("at the holds ({hold_s:.1} s of evidence)")
+    } else {
+        format!("over all regions (holds {hold_s:.1} s < {MIN_REGION_EVIDENCE_S} s)")
+    };
     // l/min at 10 bar → l/min/bar.
     let per_bar = |theta: f64| theta * LEAK_UNIT * 1e5 * LPM_PER_M3S;
     let (di, de) = (per_bar(mean[0]), per_bar(mean[1]));
@@ -454,7 +463,7 @@ fn leakage_and_baseline(samples: &[&[Sample]], mut p: Params) -> Result<LeakFit,
         value: format!(
             "seal {seal:.5} l/min/bar ({di:+.5}), rod side → tank {ext:.5} l/min/bar ({de:+.5})"
         ),
-        quality: "evidence-weighted mean of the both-filter's leak estimates".into(),
+        quality: format!("evidence-weighted mean of the both-filter's leak estimates {over}"),
     });
     p.leakage.seal_lpm_per_bar = seal;
     p.leakage.external_lpm_per_bar = ext;
