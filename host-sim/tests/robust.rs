@@ -71,7 +71,7 @@ fn closed_loop(seconds: f64) -> Scenario {
 
 #[test]
 fn a_ten_second_valve_step_test_ends_conclusive() {
-    // Rig 4 stepped +0.3: the hold after the 2 s warm-up and the move are
+    // Rig 4 stepped +0.3: the hold after the warm-up and the move are
     // evidence enough for `healthy`. Rig 6 stepped −0.4 sits 6 s at the
     // end stop with the valve open, where no leak can be seen, after a
     // hold that gave little evidence: it must not claim `healthy` then,
@@ -588,16 +588,17 @@ fn a_leak_the_alarm_cannot_confirm_is_never_reported_healthy() {
 
 #[test]
 fn a_leak_reading_the_model_probabilities_contradict_is_never_healthy() {
-    // Development rig 4 at 50 bar, 25 °C, its step test with a 1 l/min
+    // Development rig 4 at 100 bar, 40 °C, its step test with a 1 l/min
     // internal leak: the `both` filter reads internal leakage above the
     // alarm level, but the bank's likelihoods do not back the leak
     // hypotheses (the leak filters still converging pay their complexity
     // penalty), so no alarm may be raised. Nor may the verdict stay
     // `healthy` once that reading has stood above the alarm level for the
-    // debounce time. (Development rig 2's step test, this test's case
-    // before, used to end `healthy`; with the rod-side edges calibrated its
-    // leak is now backed and alarms.)
-    let (rows, mut m, _) = development_run("dev/rig4/50bar/25C/step-internal-1.00");
+    // debounce time. (This test's cases before — development rig 2's step
+    // test, then rig 4's at 25 °C — now alarm: the first with the rod-side
+    // edges calibrated, the second with the 0.5 s warm-up, in the hold
+    // before the step.)
+    let (rows, mut m, _) = development_run("dev/rig4/100bar/40C/step-internal-1.00");
     let mut contradicted = false;
     let mut last = None;
     for row in &rows {
