@@ -72,20 +72,23 @@ impl Run {
     /// time, after the first correction, it found 6 more and made a
     /// survey rig's healthy 10-minute hold alarm. With less than
     /// `min_hold_s` of evidence at holds, the mean over all regions.
-    pub fn healthy_leakage(&self, min_hold_s: f64) -> [f64; 2] {
+    /// Returns the mean and whether the holds set it.
+    pub fn healthy_leakage(&self, min_hold_s: f64) -> ([f64; 2], bool) {
         let hold = self.region_sums[HOLDING_REGION];
-        let s = if hold[2] >= min_hold_s {
+        let at_holds = hold[2] >= min_hold_s;
+        let s = if at_holds {
             hold
         } else {
             self.region_sums
                 .iter()
                 .fold([0.0; 3], |a, r| [a[0] + r[0], a[1] + r[1], a[2] + r[2]])
         };
-        if s[2] > 0.0 {
+        let mean = if s[2] > 0.0 {
             [s[0] / s[2], s[1] / s[2]]
         } else {
             [0.0; 2]
-        }
+        };
+        (mean, at_holds)
     }
 }
 
@@ -247,13 +250,13 @@ mod tests {
             region_sums: [[2.0, 0.5, 5.0], [-0.6, 0.3, 30.0], [0.5, 0.0, 5.0]],
             ..Run::default()
         };
-        let [i, e] = run.healthy_leakage(2.0);
+        let ([i, e], _) = run.healthy_leakage(2.0);
         assert!((i + 0.02).abs() < 1e-12 && (e - 0.01).abs() < 1e-12);
         // Holds seen for less than required: the mean over all regions.
-        let [i, e] = run.healthy_leakage(31.0);
+        let ([i, e], _) = run.healthy_leakage(31.0);
         assert!((i - 1.9 / 40.0).abs() < 1e-12 && (e - 0.8 / 40.0).abs() < 1e-12);
         run.region_sums = [[0.0; 3]; 3];
-        assert_eq!(run.healthy_leakage(2.0), [0.0; 2]);
+        assert_eq!(run.healthy_leakage(2.0).0, [0.0; 2]);
     }
 
     /// Feeds `carry` `secs` of a 0.25 s evidence-time average of `flow`

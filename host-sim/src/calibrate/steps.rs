@@ -446,9 +446,9 @@ fn leakage_and_baseline(samples: &[&[Sample]], mut p: Params) -> Result<LeakFit,
     // 4. Healthy leakage: the model's own coefficients absorb the holds'
     // mean.
     let first = check::run_pieces(samples, &p, ALL)?;
-    let mean = first.healthy_leakage(MIN_REGION_EVIDENCE_S);
+    let (mean, at_holds) = first.healthy_leakage(MIN_REGION_EVIDENCE_S);
     let hold_s = first.region_sums[HOLDING_REGION][2];
-    let over = if hold_s >= MIN_REGION_EVIDENCE_S {
+    let over = if at_holds {
         format!("at the holds ({hold_s:.1} s of evidence)")
     } else {
         format!("over all regions (holds {hold_s:.1} s < {MIN_REGION_EVIDENCE_S} s)")
