@@ -7,6 +7,7 @@ use super::{
     MAX_REFIT_GAIN_CHANGE_PCT, MAX_VALIDATION_NIS, MIN_DURATION_S, MIN_EVIDENCE_FRACTION,
     MIN_STEADY_FIT_S, MIN_STEADY_S, WARN_VALVE_MISFIT_FRACTION,
 };
+use monitor::params::{EXTENDING_REGION, RETRACTING_REGION};
 use monitor::status::VALVE_GAIN_MISFIT;
 use monitor::{Params, Sample};
 
@@ -356,7 +357,10 @@ impl Floors {
     /// Returns the directions so covered, with their spread.
     fn cover_narrow_moves(&mut self, motion: &Motion) -> Vec<(&'static str, f64)> {
         let mut covered = Vec::new();
-        for (region, spread) in [(0, motion.retract_spread), (2, motion.extend_spread)] {
+        for (region, spread) in [
+            (RETRACTING_REGION, motion.retract_spread),
+            (EXTENDING_REGION, motion.extend_spread),
+        ] {
             if spread < NARROW_MOVE_SPREAD {
                 for leak in &mut self.region {
                     leak[region] = leak[region].max(NARROW_MOVE_FLOOR_LPM);

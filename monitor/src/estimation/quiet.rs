@@ -31,6 +31,7 @@
 //! an internal leak — but it is also harmless, a few percent of a fraction
 //! of a litre). They learn with w_t·q²/(q² + q_g²).
 
+use crate::params::{EXTENDING_REGION, RETRACTING_REGION};
 use crate::real::Real;
 use crate::signal::Conditioned;
 
@@ -55,8 +56,8 @@ const RAIL_BAND_BAR: f32 = 3.0;
 /// classic end-stop leak test closes the valve; a closed valve is a hold.)
 pub fn pinned(c: &Conditioned, region: usize) -> bool {
     let (fed, drained) = match region {
-        0 => (c.p_rod_bar, c.p_piston_bar),
-        2 => (c.p_piston_bar, c.p_rod_bar),
+        RETRACTING_REGION => (c.p_rod_bar, c.p_piston_bar),
+        EXTENDING_REGION => (c.p_piston_bar, c.p_rod_bar),
         _ => return false,
     };
     fed >= c.p_supply_bar - RAIL_BAND_BAR && drained <= c.p_tank_bar + RAIL_BAND_BAR

@@ -560,17 +560,22 @@ pub struct Params {
     pub can: CanConfig,
 }
 
+/// The retracting region's index in [`operating_region`]'s numbering.
+pub const RETRACTING_REGION: usize = 0;
 /// The holding region's index in [`operating_region`]'s numbering.
 pub const HOLDING_REGION: usize = 1;
+/// The extending region's index in [`operating_region`]'s numbering.
+pub const EXTENDING_REGION: usize = 2;
 
-/// Operating region of a valve command for `[baseline]`: 0 retracting
-/// (u < null − dead zone), 1 holding ([`HOLDING_REGION`]), 2 extending
-/// (u > null + dead zone). `hold_band` is [`Params::hold_band`].
+/// Operating region of a valve command for `[baseline]`:
+/// [`RETRACTING_REGION`] (u < null − dead zone), [`HOLDING_REGION`],
+/// [`EXTENDING_REGION`] (u > null + dead zone). `hold_band` is
+/// [`Params::hold_band`].
 pub fn operating_region(u: f32, hold_band: (f32, f32)) -> usize {
     if u < hold_band.0 {
-        0
+        RETRACTING_REGION
     } else if u > hold_band.1 {
-        2
+        EXTENDING_REGION
     } else {
         HOLDING_REGION
     }
