@@ -250,13 +250,15 @@ mod tests {
             region_sums: [[2.0, 0.5, 5.0], [-0.6, 0.3, 30.0], [0.5, 0.0, 5.0]],
             ..Run::default()
         };
-        let ([i, e], _) = run.healthy_leakage(2.0);
+        let ([i, e], at_holds) = run.healthy_leakage(2.0);
         assert!((i + 0.02).abs() < 1e-12 && (e - 0.01).abs() < 1e-12);
+        assert!(at_holds, "the report must say the holds set it");
         // Holds seen for less than required: the mean over all regions.
-        let ([i, e], _) = run.healthy_leakage(31.0);
+        let ([i, e], at_holds) = run.healthy_leakage(31.0);
         assert!((i - 1.9 / 40.0).abs() < 1e-12 && (e - 0.8 / 40.0).abs() < 1e-12);
+        assert!(!at_holds, "the report must say all regions set it");
         run.region_sums = [[0.0; 3]; 3];
-        assert_eq!(run.healthy_leakage(2.0).0, [0.0; 2]);
+        assert_eq!(run.healthy_leakage(2.0), ([0.0; 2], false));
     }
 
     /// Feeds `carry` `secs` of a 0.25 s evidence-time average of `flow`
