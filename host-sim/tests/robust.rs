@@ -765,3 +765,56 @@ fn an_installation_nobody_calibrated_is_never_healthy_and_alarms_on_gross_leaks_
         "{raised:?}"
     );
 }
+
+/// The 60 s healthy recording cell `rig` of the further rigs' `--quick`
+/// matrix is calibrated from (one cell per rig).
+fn further_calibration_run(rig: u64) -> Run {
+    let config = PlanConfig {
+        sets: vec![RigSet::Wide],
+        quick: true,
+        ..PlanConfig::default()
+    };
+    plan(&config)
+        .cells
+        .iter()
+        .find(|c| c.cell.rig == rig)
+        .expect("a further cell")
+        .calibration
+        .run()
+}
+
+#[test]
+fn a_loop_that_hunts_is_named_as_the_cause_of_the_refusal() {
+    // Further rig 9 at 100 bar, 40 °C: its position loop, stable at
+    // 50 bar, hunts at 18 Hz with the chamber pressures swinging by tens
+    // of bar for 91 % of the minute. The refusal must send the engineer to
+    // the loop, not to record more moves.
+    let samples: Vec<monitor::Sample> = plant::simulate(&further_calibration_run(9))
+        .iter()
+        .map(row_sample)
+        .collect();
+    let why = calibrate(&samples, &Params::nominal())
+        .expect_err("a hunting loop leaves nothing to calibrate on")
+        .to_string();
+    assert!(
+        why.contains(": the position loop oscillates at ≈ ")
+            && why.contains("stabilise the loop, then record again; as it is, "),
+        "{why}"
+    );
+    // A loop that hunts for a third of its minute is calibrated, and
+    // warned about: development rig 5 at 100 bar, 40 °C.
+    let cal = calibrated(5, 100.0, 40.0);
+    let o = cal.oscillation.as_ref().expect("measured");
+    assert!((0.2..0.5).contains(&o.share), "{o:?}");
+    assert_warns(&cal, |w| {
+        w.starts_with("the position loop oscillates at ≈ ")
+    });
+    // A settled loop: development rig 1 at 50 bar, 25 °C.
+    let cal = calibrated(1, 50.0, 25.0);
+    assert!(cal.oscillation.as_ref().expect("measured").share < 0.05);
+    assert!(
+        !cal.warnings.iter().any(|w| w.contains("oscillates")),
+        "{:?}",
+        cal.warnings
+    );
+}

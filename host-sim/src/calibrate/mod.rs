@@ -16,6 +16,9 @@
 //!    `sensors.position_noise_m`: every later step, and the monitor, weighs
 //!    the data by them. A filter told 0.08 bar on a 0.5 bar rig reads the
 //!    noise as leaks (NIS ≈ 25 instead of 3, healthy leakage 5× too large).
+//!    **Loop oscillation** (`oscillation.rs`): how much of the recording
+//!    the position loop hunts; named in the report, warned about, and
+//!    named as the cause of a refusal where it dominates.
 //! 1. **Valve**, from quasi-steady moves in each direction: chamber
 //!    continuity gives the metering flow of each edge from the piston
 //!    velocity and the oil compressed while the chamber pressure still
@@ -74,6 +77,7 @@
 mod check;
 mod fit;
 pub mod noise;
+pub mod oscillation;
 mod procedure;
 mod report;
 mod steps;
@@ -81,6 +85,7 @@ mod steps;
 pub use check::{Run, REGIONS};
 pub use fit::{Motion, Quality};
 pub use noise::ChannelNoise;
+pub use oscillation::Oscillation;
 
 use procedure::calibrate_with;
 
@@ -218,6 +223,29 @@ pub enum CalibrationError {
 }
 
 impl CalibrationError {
+    /// The same refusal with `cause` named first: what the engineer must
+    /// change before the recording can say more.
+    fn caused_by(self, cause: &str) -> Self {
+        let first = |why: String| {
+            format!("{cause}: stabilise the loop, then record again; as it is, {why}")
+        };
+        match self {
+            Self::NotEnoughMotion { missing, report } => Self::NotEnoughMotion {
+                missing: first(missing),
+                report,
+            },
+            Self::PoorFit { why, report } => Self::PoorFit {
+                why: first(why),
+                report,
+            },
+            Self::ValidationFailed { why, report } => Self::ValidationFailed {
+                why: first(why),
+                report,
+            },
+            other => other,
+        }
+    }
+
     /// The calibration report up to the refusal, if any.
     pub fn report(&self) -> Option<&str> {
         match self {
@@ -255,6 +283,9 @@ pub struct Calibration {
     pub warnings: Vec<String>,
     /// Every channel's noise figures.
     pub noise: Vec<ChannelNoise>,
+    /// How much of the recording the position loop oscillates (`None`
+    /// without a supply pressure or a valve command).
+    pub oscillation: Option<Oscillation>,
     /// Recording length and the length of the validation fit's part, s.
     pub duration_s: f64,
     /// As above.
@@ -302,14 +333,32 @@ pub struct Calibration {
 /// (`filter.laminar_factor_min`); an installation that cannot be described
 /// with that bound is calibrated without it (said first among the
 /// warnings) before it is refused.
+///
+/// A position loop that oscillates is measured first ([`oscillation`]) and
+/// named in the report; where it oscillates most of the time a refusal
+/// names it as the cause: more recording of the same machine would not
+/// help.
 pub fn calibrate(samples: &[Sample], start: &Params) -> Result<Calibration, CalibrationError> {
-    match calibrate_mechanics(samples, start) {
+    let oscillation = oscillation::measure(samples);
+    calibrate_bounded(samples, start, oscillation.as_ref()).map_err(|e| match &oscillation {
+        Some(o) if o.is_the_cause() => e.caused_by(&o.describe()),
+        _ => e,
+    })
+}
+
+/// [`calibrate`], with the laminar bound and, failing that, without.
+fn calibrate_bounded(
+    samples: &[Sample],
+    start: &Params,
+    oscillation: Option<&Oscillation>,
+) -> Result<Calibration, CalibrationError> {
+    match calibrate_mechanics(samples, start, oscillation) {
         Err(e @ (CalibrationError::PoorFit { .. } | CalibrationError::ValidationFailed { .. }))
             if start.filter.laminar_factor_min > 0.0 =>
         {
             let mut unbounded = start.clone();
             unbounded.filter.laminar_factor_min = UNBOUNDED_LAMINAR_FACTOR;
-            let mut cal = calibrate_mechanics(samples, &unbounded)?;
+            let mut cal = calibrate_mechanics(samples, &unbounded, oscillation)?;
             cal.warnings.insert(
                 0,
                 format!(
@@ -327,6 +376,7 @@ pub fn calibrate(samples: &[Sample], start: &Params) -> Result<Calibration, Cali
 fn calibrate_mechanics(
     samples: &[Sample],
     start: &Params,
+    oscillation: Option<&Oscillation>,
 ) -> Result<Calibration, CalibrationError> {
     // A recording without moves in both directions cannot even validate
     // a partial calibration: the monitor must have seen both, for as long
@@ -335,13 +385,13 @@ fn calibrate_mechanics(
     let moves = Motion::of(&fit::prepare(samples));
     let both_ways = moves.extend_s > 0.0 && moves.retract_s > 0.0
         || moves.moving_s.iter().all(|&s| s >= MIN_STEADY_S);
-    match calibrate_with(samples, start, Mechanics::Strict) {
+    match calibrate_with(samples, start, Mechanics::Strict, oscillation) {
         Err(e @ (CalibrationError::NotEnoughMotion { .. } | CalibrationError::PoorFit { .. }))
             if both_ways =>
         {
             let why = e.to_string();
-            let partial = calibrate_with(samples, start, Mechanics::Lenient)
-                .or_else(|_| calibrate_with(samples, start, Mechanics::Kept));
+            let partial = calibrate_with(samples, start, Mechanics::Lenient, oscillation)
+                .or_else(|_| calibrate_with(samples, start, Mechanics::Kept, oscillation));
             let mut cal = partial.map_err(|partial| {
                 // Say both: why the full calibration was refused, and why
                 // keeping the valve and load did not pass either.

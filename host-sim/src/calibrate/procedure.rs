@@ -3,9 +3,9 @@
 use super::fit::{self, Motion};
 use super::steps::{fit_plant, missing_motion, HeldOut};
 use super::{
-    check, noise, Calibration, CalibrationError, Mechanics, FLOOR_MARGIN, MAX_DETECTION_FLOOR_LPM,
-    MAX_REFIT_GAIN_CHANGE_PCT, MAX_VALIDATION_NIS, MIN_DURATION_S, MIN_EVIDENCE_FRACTION,
-    MIN_STEADY_FIT_S, MIN_STEADY_S, WARN_VALVE_MISFIT_FRACTION,
+    check, noise, Calibration, CalibrationError, Mechanics, Oscillation, FLOOR_MARGIN,
+    MAX_DETECTION_FLOOR_LPM, MAX_REFIT_GAIN_CHANGE_PCT, MAX_VALIDATION_NIS, MIN_DURATION_S,
+    MIN_EVIDENCE_FRACTION, MIN_STEADY_FIT_S, MIN_STEADY_S, WARN_VALVE_MISFIT_FRACTION,
 };
 use monitor::params::{EXTENDING_REGION, RETRACTING_REGION};
 use monitor::status::VALVE_GAIN_MISFIT;
@@ -17,6 +17,7 @@ pub(super) fn calibrate_with(
     samples: &[Sample],
     start: &Params,
     mechanics: Mechanics,
+    oscillation: Option<&Oscillation>,
 ) -> Result<Calibration, CalibrationError> {
     start.validate().map_err(CalibrationError::Params)?;
     // What calibration fits and writes describes this installation: it is
@@ -69,6 +70,13 @@ pub(super) fn calibrate_with(
         *low = -7.0 * sigma_max;
     }
     cal.params = p.clone();
+    cal.oscillation = oscillation.cloned();
+    if let Some(o) = oscillation.filter(|o| o.worth_a_warning()) {
+        cal.warnings.push(format!(
+            "{}: the monitor counts none of that as leak evidence, so on this machine it judges leaks only where the loop is settled, and says `inconclusive` where that is too little; stabilise the loop (lower its gain at this supply pressure) for full monitoring",
+            o.describe()
+        ));
+    }
 
     // Motion: the whole recording, then the validation fit's part.
     let refuse = |mut cal: Calibration, why: String| {

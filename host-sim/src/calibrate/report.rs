@@ -90,6 +90,24 @@ impl Calibration {
                 self.params.sensors.pressure_noise_bar, self.params.sensors.position_noise_m
             );
         }
+        if let Some(o) = &self.oscillation {
+            let _ = if o.share > 0.0 {
+                writeln!(
+                    s,
+                    "\nLoop oscillation ({} windows of {} s judged): {}.",
+                    o.windows,
+                    super::oscillation::WINDOW_S,
+                    o.describe()
+                )
+            } else {
+                writeln!(
+                    s,
+                    "\nLoop oscillation ({} windows of {} s judged): none.",
+                    o.windows,
+                    super::oscillation::WINDOW_S
+                )
+            };
+        }
         if let Some(v) = &self.validation {
             let alarm = self.params.alarm.alarm_lpm;
             let _ = writeln!(
@@ -149,7 +167,14 @@ impl Calibration {
                 let _ = writeln!(s, "\nVerdict: accepted.");
             }
             Some(why) => {
-                let _ = writeln!(s, "\nVerdict: refused because {why}. Nothing written.");
+                let cause = match &self.oscillation {
+                    Some(o) if o.is_the_cause() => format!("{}: ", o.describe()),
+                    _ => String::new(),
+                };
+                let _ = writeln!(
+                    s,
+                    "\nVerdict: refused because {cause}{why}. Nothing written."
+                );
             }
         }
         s

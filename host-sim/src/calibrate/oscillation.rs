@@ -1,0 +1,306 @@
+//! Does the machine's position loop oscillate?
+//!
+//! A position loop tuned at one supply pressure can hunt at a higher one
+//! (the valve's flow gain grows with √Δp): the valve command swings a few
+//! per cent of its travel at 10–30 Hz and the chamber pressures with it by
+//! tens of bar. No sample of such a stretch counts as leak evidence (the
+//! monitor's evidence weight falls with the chamber pressures' rate), and
+//! calibration finds few quasi-steady moves in it — a refusal that names
+//! the missing moves sends the engineer to record more of the same. The
+//! oscillation is measured here so that the report names it.
+//!
+//! The recording is cut into [`WINDOW_S`] windows; in each, the chamber
+//! pressures and the valve command are taken about their least-squares
+//! line (a steady move or a pressure ramp leaves nothing). A window
+//! oscillates when a chamber pressure swings at least
+//! [`CHAMBER_SWING_SHARE`] of the supply pressure (1σ) while the command
+//! swings at least [`COMMAND_SWING`]: pump ripple moves the pressures
+//! without the command, a noisy command reading moves no pressure.
+
+use monitor::Sample;
+
+/// Length of the windows, s: several periods of a 10–30 Hz oscillation.
+pub const WINDOW_S: f64 = 0.2;
+/// Chamber-pressure swing (1σ about the window's trend), relative to the
+/// supply pressure, from which a window oscillates. On the development
+/// rigs' 60 s recordings, hunting loops swing 25–48 bar at 100 bar, a
+/// settled loop's valve steps 4–6 bar at 50 bar.
+pub const CHAMBER_SWING_SHARE: f64 = 0.10;
+/// Valve-command swing (1σ about the window's trend) from which a window
+/// oscillates: 0.5 % of the travel, hunting loops 2–7 %.
+pub const COMMAND_SWING: f64 = 0.005;
+/// Share of the recording from which the report warns: the monitor then
+/// has no evidence for that share of the machine's work.
+pub const WARN_SHARE: f64 = 0.15;
+/// Share from which a refused calibration names the oscillation as its
+/// cause: 8 development cells whose loops hunt 70–95 % of the time were
+/// refused for want of quasi-steady moves or of evidence.
+pub const CAUSE_SHARE: f64 = 0.5;
+/// Fewest readings a window needs to be judged.
+const MIN_WINDOW_SAMPLES: usize = 20;
+
+/// How much of a recording the position loop oscillates, and how.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Oscillation {
+    /// Share of the judged windows that oscillate, 0–1.
+    pub share: f64,
+    /// Windows judged (complete readings, at least [`MIN_WINDOW_SAMPLES`]).
+    pub windows: usize,
+    /// Oscillation frequency over the oscillating windows (the command's
+    /// cycles per second), Hz; 0 if none oscillates.
+    pub frequency_hz: f64,
+    /// Median chamber-pressure swing (1σ) over the oscillating windows,
+    /// bar.
+    pub chamber_swing_bar: f64,
+    /// Median valve-command swing (1σ) over the oscillating windows.
+    pub command_swing: f64,
+    /// Median supply pressure over the recording, bar.
+    pub supply_bar: f64,
+}
+
+impl Oscillation {
+    /// The report's sentence: what oscillates, how much, how often.
+    pub fn describe(&self) -> String {
+        format!(
+            "the position loop oscillates at ≈ {:.0} Hz during {:.0} % of the recording (chamber pressures {:.0} bar rms about their trend, {:.0} % of the {:.0} bar supply; valve command {:.3} rms)",
+            self.frequency_hz,
+            100.0 * self.share,
+            self.chamber_swing_bar,
+            100.0 * self.chamber_swing_bar / self.supply_bar,
+            self.supply_bar,
+            self.command_swing
+        )
+    }
+
+    /// The report warns about it ([`WARN_SHARE`]).
+    pub fn worth_a_warning(&self) -> bool {
+        self.share >= WARN_SHARE
+    }
+
+    /// A refusal names it as the cause ([`CAUSE_SHARE`]).
+    pub fn is_the_cause(&self) -> bool {
+        self.share >= CAUSE_SHARE
+    }
+}
+
+/// `y` less its least-squares line in `t`.
+fn about_line(t: &[f64], y: &[f64]) -> Vec<f64> {
+    let n = t.len() as f64;
+    let (tm, ym) = (t.iter().sum::<f64>() / n, y.iter().sum::<f64>() / n);
+    let stt: f64 = t.iter().map(|a| (a - tm) * (a - tm)).sum();
+    let sty: f64 = t.iter().zip(y).map(|(a, b)| (a - tm) * (b - ym)).sum();
+    let slope = if stt > 0.0 { sty / stt } else { 0.0 };
+    t.iter()
+        .zip(y)
+        .map(|(a, b)| b - ym - slope * (a - tm))
+        .collect()
+}
+
+/// Root mean square of `r`.
+fn rms(r: &[f64]) -> f64 {
+    (r.iter().map(|x| x * x).sum::<f64>() / r.len() as f64).sqrt()
+}
+
+/// Whole cycles of `r` (at times `t`) and the time they took, s: between
+/// the first and the last upward crossing through ±`band` (a crossing
+/// counts once the signal went below −band and then above +band, at the
+/// same phase every cycle; the window's partial cycles at either end do
+/// not bias the frequency).
+fn cycles(t: &[f64], r: &[f64], band: f64) -> (usize, f64) {
+    let mut below = false;
+    let mut ups = 0usize;
+    let (mut first, mut last) = (0.0, 0.0);
+    for (&ti, &x) in t.iter().zip(r) {
+        if x < -band {
+            below = true;
+        } else if x > band && below {
+            below = false;
+            if ups == 0 {
+                first = ti;
+            }
+            last = ti;
+            ups += 1;
+        }
+    }
+    (ups.saturating_sub(1), last - first)
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    if v.is_empty() {
+        0.0
+    } else {
+        super::noise::median(&mut v)
+    }
+}
+
+/// One window's readings: time, piston and rod pressure, command.
+#[derive(Default)]
+struct Window {
+    t: Vec<f64>,
+    p_piston: Vec<f64>,
+    p_rod: Vec<f64>,
+    command: Vec<f64>,
+    complete: bool,
+}
+
+impl Window {
+    fn start() -> Self {
+        Self {
+            complete: true,
+            ..Self::default()
+        }
+    }
+
+    fn push(&mut self, s: &Sample) {
+        match (s.p_piston_bar, s.p_rod_bar, s.u_valve) {
+            (Some(a), Some(b), Some(u)) if a.is_finite() && b.is_finite() && u.is_finite() => {
+                self.t.push(s.t_s);
+                self.p_piston.push(a.into());
+                self.p_rod.push(b.into());
+                self.command.push(u.into());
+            }
+            _ => self.complete = false,
+        }
+    }
+}
+
+/// Measure the loop's oscillation over `samples`; `None` without a supply
+/// pressure or a single complete window.
+pub fn measure(samples: &[Sample]) -> Option<Oscillation> {
+    let supply_bar = median(
+        samples
+            .iter()
+            .filter_map(|s| s.p_supply_bar.map(f64::from))
+            .filter(|p| p.is_finite())
+            .collect(),
+    );
+    if !(supply_bar > 0.0) {
+        return None;
+    }
+    let mut windows = Vec::new();
+    let mut w = Window::start();
+    for s in samples {
+        if w.t.first().is_some_and(|&t0| s.t_s - t0 >= WINDOW_S) {
+            windows.push(std::mem::replace(&mut w, Window::start()));
+        }
+        w.push(s);
+    }
+    windows.push(w);
+    let (mut judged, mut cycles_total, mut cycles_s) = (0, 0, 0.0);
+    let (mut chamber, mut command) = (Vec::new(), Vec::new());
+    for w in windows
+        .iter()
+        .filter(|w| w.complete && w.t.len() >= MIN_WINDOW_SAMPLES)
+    {
+        judged += 1;
+        let swing = rms(&about_line(&w.t, &w.p_piston)).max(rms(&about_line(&w.t, &w.p_rod)));
+        let u = about_line(&w.t, &w.command);
+        let command_swing = rms(&u);
+        if swing >= CHAMBER_SWING_SHARE * supply_bar && command_swing >= COMMAND_SWING {
+            // Half a σ of hysteresis: noise on the command adds no cycles.
+            let (n, s) = cycles(&w.t, &u, 0.5 * command_swing);
+            cycles_total += n;
+            cycles_s += s;
+            chamber.push(swing);
+            command.push(command_swing);
+        }
+    }
+    if judged == 0 {
+        return None;
+    }
+    Some(Oscillation {
+        share: chamber.len() as f64 / judged as f64,
+        windows: judged,
+        frequency_hz: if cycles_s > 0.0 {
+            cycles_total as f64 / cycles_s
+        } else {
+            0.0
+        },
+        chamber_swing_bar: median(chamber),
+        command_swing: median(command),
+        supply_bar,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::f64::consts::PI;
+
+    /// 60 s at 100 bar: the loop hunts at `hz` (±30 bar, command ±0.04)
+    /// while `hunting(t)`, otherwise it moves smoothly; pump ripple of
+    /// ±2 bar at 150 Hz throughout, with the command untouched by it.
+    fn recording(hz: f64, hunting: impl Fn(f64) -> bool) -> Vec<Sample> {
+        (0..60_000)
+            .map(|k| {
+                let t = k as f64 * 1e-3;
+                let move_ = 20.0 * (0.3 * t).sin();
+                let ripple = 2.0 * (2.0 * PI * 150.0 * t).sin();
+                let (dp, du) = if hunting(t) {
+                    let s = (2.0 * PI * hz * t).sin();
+                    (30.0 * s, 0.04 * s)
+                } else {
+                    (0.0, 0.0)
+                };
+                Sample {
+                    t_s: t,
+                    p_supply_bar: Some((100.0 + ripple) as f32),
+                    p_piston_bar: Some((50.0 + move_ + dp + ripple) as f32),
+                    p_rod_bar: Some((40.0 - move_ - dp + ripple) as f32),
+                    p_tank_bar: Some(1.0),
+                    x_piston_m: Some((0.1 + 0.05 * (0.3 * t).sin()) as f32),
+                    u_valve: Some((0.1 * (0.3 * t).cos() + du) as f32),
+                    temp_oil_c: None,
+                }
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_hunting_loop_is_measured_with_its_frequency_swing_and_share() {
+        let o = measure(&recording(18.0, |t| t < 45.0)).unwrap();
+        assert!((o.share - 0.75).abs() < 0.02, "{o:?}");
+        assert!((o.frequency_hz - 18.0).abs() < 1.0, "{o:?}");
+        // ±30 bar of sine is 21 bar 1σ.
+        assert!(
+            (o.chamber_swing_bar - 30.0 / 2f64.sqrt()).abs() < 1.5,
+            "{o:?}"
+        );
+        assert!(
+            (o.command_swing - 0.04 / 2f64.sqrt()).abs() < 0.003,
+            "{o:?}"
+        );
+        assert!(o.worth_a_warning() && o.is_the_cause());
+        let said = o.describe();
+        assert!(said.contains("≈ 18 Hz") && said.contains("75 %"), "{said}");
+    }
+
+    #[test]
+    fn smooth_moves_and_pump_ripple_are_no_oscillation() {
+        let o = measure(&recording(18.0, |_| false)).unwrap();
+        assert_eq!(o.share, 0.0, "{o:?}");
+        assert!(!o.worth_a_warning());
+    }
+
+    #[test]
+    fn a_short_spell_warns_without_being_the_cause() {
+        let o = measure(&recording(25.0, |t| (20.0..32.0).contains(&t))).unwrap();
+        assert!((o.share - 0.2).abs() < 0.02, "{o:?}");
+        assert!(o.worth_a_warning() && !o.is_the_cause(), "{o:?}");
+    }
+
+    #[test]
+    fn missing_readings_leave_their_windows_unjudged() {
+        let mut s = recording(18.0, |_| true);
+        for x in &mut s[..30_000] {
+            x.u_valve = None;
+        }
+        let o = measure(&s).unwrap();
+        assert!((o.windows as f64 - 150.0).abs() <= 1.0, "{o:?}");
+        assert!(o.share > 0.99, "{o:?}");
+        for x in &mut s {
+            x.p_supply_bar = None;
+        }
+        assert_eq!(measure(&s), None);
+    }
+}
