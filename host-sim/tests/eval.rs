@@ -617,6 +617,12 @@ fn tiny_evaluation_end_to_end() {
     let json = serde_json::to_value(&ev).unwrap();
     assert_eq!(json["runs"].as_array().unwrap().len(), 2);
     assert!(json["cells"][0]["calibration"]["status"].is_string());
+    // The loop's oscillation is measured on every calibrated cell's
+    // recording, whatever came of the calibration, and shown per cell.
+    let share = cal.loop_oscillation_share.expect("measured");
+    assert!((0.0..=1.0).contains(&share), "{share}");
+    assert!(json["cells"][0]["calibration"]["loop_oscillation_share"].is_number());
+    assert!(md.contains("| loop oscillating |"), "{md}");
     // From the cache: the same results.
     let again = eval::run_plan(&p, &cfg, &|_, _| {}).unwrap();
     assert!(again.runs.iter().all(|r| r.cached));

@@ -4,7 +4,7 @@
 
 use super::plan::{CellPlan, Plan, PlanConfig};
 use super::{Cell, Job, RunSpec};
-use crate::calibrate::{calibrate, Fit};
+use crate::calibrate::{calibrate, oscillation, Fit};
 use anyhow::{Context, Result};
 use monitor::Params;
 use serde::Serialize;
@@ -93,6 +93,10 @@ pub struct CalibrationOutcome {
     pub leak_before_lpm: Option<[f64; 2]>,
     /// As above, after.
     pub leak_after_lpm: Option<[f64; 2]>,
+    /// Share of the calibration recording in which the position loop
+    /// oscillates (`calibrate::oscillation`), whatever the calibration's
+    /// outcome; `None` where it cannot be measured or calibration is off.
+    pub loop_oscillation_share: Option<f64>,
     /// Wall time of the calibration, s.
     pub wall_s: f64,
     /// The parameters the cell's runs use.
@@ -272,6 +276,7 @@ pub fn calibrate_cell(cp: &CellPlan, cfg: &ExecConfig) -> Result<CellResult> {
         nis_after: None,
         leak_before_lpm: None,
         leak_after_lpm: None,
+        loop_oscillation_share: None,
         wall_s: 0.0,
         params: start.clone(),
     };
@@ -279,6 +284,7 @@ pub fn calibrate_cell(cp: &CellPlan, cfg: &ExecConfig) -> Result<CellResult> {
         let (text, _) = recording_for(&cp.calibration, cfg.cache.as_deref())?;
         let samples = samples_of(&text)?;
         drop(text);
+        out.loop_oscillation_share = oscillation::measure(&samples).map(|o| o.share);
         match calibrate(&samples, &start) {
             Ok(c) => {
                 out.status = "calibrated";

@@ -318,8 +318,8 @@ pub fn calibration_table(out: &mut String, cells: &[&CellResult], runs: &[&RunRe
             ""
         }
     );
-    let _ = writeln!(out, "| rig | supply | oil | calibration | healthy-filter NIS before → after | largest leak reading after, l/min | healthy runs' leading mean NIS, median (max) |");
-    let _ = writeln!(out, "|---|---|---|---|---|---|---|");
+    let _ = writeln!(out, "| rig | supply | oil | calibration | loop oscillating | healthy-filter NIS before → after | largest leak reading after, l/min | healthy runs' leading mean NIS, median (max) |");
+    let _ = writeln!(out, "|---|---|---|---|---|---|---|---|");
     for c in cells {
         let cal = &c.calibration;
         let status = match &cal.refused {
@@ -341,7 +341,7 @@ pub fn calibration_table(out: &mut String, cells: &[&CellResult], runs: &[&RunRe
             .collect();
         let _ = writeln!(
             out,
-            "| {}{} | {} bar | {} °C | {status} | {} | {} | {} |",
+            "| {}{} | {} bar | {} °C | {status} | {} | {} | {} | {} |",
             c.cell.rig,
             if c.cell.temp_column {
                 " (temp_oil)"
@@ -350,6 +350,8 @@ pub fn calibration_table(out: &mut String, cells: &[&CellResult], runs: &[&RunRe
             },
             c.cell.supply_bar,
             c.cell.temp_c,
+            cal.loop_oscillation_share
+                .map_or("–".into(), |s| format!("{:.0} %", 100.0 * s)),
             match (cal.nis_before, cal.nis_after) {
                 (Some(a), Some(b)) => format!("{a:.2} → {b:.2}"),
                 _ => "–".into(),
@@ -359,5 +361,8 @@ pub fn calibration_table(out: &mut String, cells: &[&CellResult], runs: &[&RunRe
             med_max(&nis, 2),
         );
     }
-    let _ = writeln!(out);
+    let _ = writeln!(
+        out,
+        "\nLoop oscillating: the share of the cell's calibration recording in which the position loop hunts (calibrate's `Loop oscillation`: a chamber pressure swinging ≥ 10 % of the supply with the valve command); no sample there counts as leak evidence, and from 50 % a refusal names it as the cause.\n"
+    );
 }
