@@ -1,6 +1,7 @@
 //! `host-sim replay`: the monitor over a recording, sample by sample,
 //! exactly as the device would see it.
 
+use crate::calibrate::oscillation;
 use crate::recording::{RecordingError, RecordingReader};
 use monitor::{Event, Monitor, Params, Real, Sample, Status, Verdict};
 use serde::Serialize;
@@ -117,6 +118,15 @@ pub struct ReplaySummary {
     pub alarm_level_internal_lpm: Option<f64>,
     /// Alarm level in use for the external leak at the end, l/min.
     pub alarm_level_external_lpm: Option<f64>,
+    /// Share of the recording in which the machine's position loop
+    /// oscillates (`calibrate::oscillation`: a chamber pressure swinging
+    /// ≥ 10 % of the supply with the valve command, in 0.2 s windows); no
+    /// sample there is leak evidence. `null` without supply, chamber
+    /// pressures and command in a single window.
+    pub loop_oscillation_share: Option<f64>,
+    /// Frequency of that oscillation, Hz (`null` where the share is, or
+    /// none oscillates).
+    pub loop_oscillation_hz: Option<f64>,
 }
 
 /// Most events a replay keeps in its summary.
@@ -271,13 +281,17 @@ pub fn replay<T: Real, R: BufRead>(
             .then_some(params.baseline.provisional_floor_lpm),
         alarm_level_internal_lpm: None,
         alarm_level_external_lpm: None,
+        loop_oscillation_share: None,
+        loop_oscillation_hz: None,
     };
+    let mut loop_meter = oscillation::Meter::new();
     let (mut inconclusive, mut nis_sum, mut nis_n) = (0u64, 0.0, 0u64);
     let t0 = first.as_ref().map(|s| s.t_s);
     let mut mismatch = 0u64;
     let head = first.into_iter().chain(second).map(Ok);
     for sample in head.chain(reader) {
         let sample = sample?;
+        loop_meter.push(&sample);
         let status = monitor.step(&sample);
         observer
             .observe(&sample, &status)
@@ -334,6 +348,11 @@ pub fn replay<T: Real, R: BufRead>(
     summary.model_mismatch_fraction = mismatch as f64 / summary.samples.max(1) as f64;
     summary.inconclusive_fraction = round4(inconclusive as f64 / summary.samples.max(1) as f64);
     summary.mean_nis = (nis_n > 0).then(|| round4(nis_sum / nis_n as f64));
+    if let Some(o) = loop_meter.finish() {
+        summary.loop_oscillation_share = Some(round4(o.share));
+        summary.loop_oscillation_hz =
+            (o.frequency_hz > 0.0).then(|| (o.frequency_hz * 10.0).round() / 10.0);
+    }
     Ok(summary)
 }
 
@@ -384,6 +403,18 @@ pub fn print_summary(s: &ReplaySummary, out: &mut dyn Write) -> std::io::Result<
             out,
             "warning     the model fits poorly on {:.0} % of samples: calibrate this installation (host-sim calibrate)",
             100.0 * s.model_mismatch_fraction
+        )?;
+    }
+    if let Some(share) = s
+        .loop_oscillation_share
+        .filter(|&v| v >= oscillation::WARN_SHARE)
+    {
+        writeln!(
+            out,
+            "warning     the position loop oscillates{} during {:.0} % of the recording: no sample there is leak evidence (stabilise the loop for full monitoring)",
+            s.loop_oscillation_hz
+                .map_or(String::new(), |hz| format!(" at ≈ {hz:.0} Hz")),
+            100.0 * share
         )?;
     }
     if !s.events.is_empty() {

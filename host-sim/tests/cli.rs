@@ -240,6 +240,53 @@ fn replay_names_the_alarm_level_in_use() {
 }
 
 #[test]
+fn a_loop_that_hunts_is_measured_and_named_by_replay() {
+    // 10 s at 100 bar of a position loop hunting at 18 Hz: the chamber
+    // pressures swing ±30 bar with a ±0.04 command, the piston stays put.
+    let mut body = String::from(HEADER);
+    for k in 0..10_000 {
+        let t = k as f64 * 1e-3;
+        let s = (2.0 * std::f64::consts::PI * 18.0 * t).sin();
+        body += &format!(
+            "{t:.3},100.0,{:.2},{:.2},1.0,0.0900,{:.4}\n",
+            50.0 + 30.0 * s,
+            40.0 - 30.0 * s,
+            0.04 * s
+        );
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let rec = write(dir.path(), "hunting.csv", &body);
+    let out = host_sim_ok(&["replay", "--json", rec.to_str().unwrap()]);
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let share = v["loop_oscillation_share"].as_f64().unwrap();
+    let hz = v["loop_oscillation_hz"].as_f64().unwrap();
+    assert!(share > 0.95 && (hz - 18.0).abs() < 1.0, "{v}");
+    let out = host_sim_ok(&["replay", rec.to_str().unwrap()]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("the position loop oscillates at ≈ 18 Hz during"),
+        "{text}"
+    );
+    // A settled recording: measured, no oscillation, no warning.
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples");
+    let out = host_sim_ok(&[
+        "replay",
+        "--json",
+        "--params",
+        root.join("reference-rig.toml").to_str().unwrap(),
+        root.join("healthy.csv.gz").to_str().unwrap(),
+    ]);
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert!(v["loop_oscillation_share"].as_f64().unwrap() < 0.05, "{v}");
+    // One sample: nothing to judge.
+    let one = write(dir.path(), "one.csv", &format!("{HEADER}{ROW0}"));
+    let out = host_sim_ok(&["replay", "--json", one.to_str().unwrap()]);
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert!(v["loop_oscillation_share"].is_null(), "{v}");
+    assert!(v["loop_oscillation_hz"].is_null(), "{v}");
+}
+
+#[test]
 fn human_summary_without_json() {
     let dir = tempfile::tempdir().unwrap();
     let rec = write(dir.path(), "ok.csv", &format!("{HEADER}{ROW0}"));

@@ -49,12 +49,13 @@ pub struct Oscillation {
     /// Oscillation frequency over the oscillating windows (the command's
     /// cycles per second), Hz; 0 if none oscillates.
     pub frequency_hz: f64,
-    /// Median chamber-pressure swing (1σ) over the oscillating windows,
-    /// bar.
+    /// Mean chamber-pressure swing (rms about the window's trend) over
+    /// the oscillating windows, bar.
     pub chamber_swing_bar: f64,
-    /// Median valve-command swing (1σ) over the oscillating windows.
+    /// Mean valve-command swing (rms about the trend) over the
+    /// oscillating windows.
     pub command_swing: f64,
-    /// Median supply pressure over the recording, bar.
+    /// Mean supply pressure over the oscillating windows, bar (0 if none).
     pub supply_bar: f64,
 }
 
@@ -125,18 +126,11 @@ fn cycles(t: &[f64], r: &[f64], band: f64) -> (usize, f64) {
     (ups.saturating_sub(1), last - first)
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
-    if v.is_empty() {
-        0.0
-    } else {
-        super::noise::median(&mut v)
-    }
-}
-
-/// One window's readings: time, piston and rod pressure, command.
+/// One window's readings: time, supply, piston and rod pressure, command.
 #[derive(Default)]
 struct Window {
     t: Vec<f64>,
+    supply: Vec<f64>,
     p_piston: Vec<f64>,
     p_rod: Vec<f64>,
     command: Vec<f64>,
@@ -144,82 +138,131 @@ struct Window {
 }
 
 impl Window {
-    fn start() -> Self {
-        Self {
-            complete: true,
-            ..Self::default()
+    fn clear(&mut self) {
+        for v in [
+            &mut self.t,
+            &mut self.supply,
+            &mut self.p_piston,
+            &mut self.p_rod,
+            &mut self.command,
+        ] {
+            v.clear();
         }
+        self.complete = true;
     }
 
     fn push(&mut self, s: &Sample) {
-        match (s.p_piston_bar, s.p_rod_bar, s.u_valve) {
-            (Some(a), Some(b), Some(u)) if a.is_finite() && b.is_finite() && u.is_finite() => {
+        let finite = |v: Option<f32>| v.filter(|v| v.is_finite()).map(f64::from);
+        match (
+            finite(s.p_supply_bar),
+            finite(s.p_piston_bar),
+            finite(s.p_rod_bar),
+            finite(s.u_valve),
+        ) {
+            (Some(ps), Some(a), Some(b), Some(u)) => {
                 self.t.push(s.t_s);
-                self.p_piston.push(a.into());
-                self.p_rod.push(b.into());
-                self.command.push(u.into());
+                self.supply.push(ps);
+                self.p_piston.push(a);
+                self.p_rod.push(b);
+                self.command.push(u);
             }
             _ => self.complete = false,
         }
     }
 }
 
-/// Measure the loop's oscillation over `samples`; `None` without a supply
-/// pressure or a single complete window.
+/// Measures the loop's oscillation sample by sample, in bounded memory
+/// (one window of readings): `calibrate` over its recording, `replay`
+/// over a recording of any length.
+#[derive(Default)]
+pub struct Meter {
+    window: Window,
+    judged: usize,
+    oscillating: usize,
+    cycles: usize,
+    cycles_s: f64,
+    /// Sums over the oscillating windows: chamber swing, command swing,
+    /// supply pressure.
+    sums: [f64; 3],
+}
+
+impl Meter {
+    /// A meter that has seen nothing.
+    pub fn new() -> Self {
+        let mut m = Self::default();
+        m.window.clear();
+        m
+    }
+
+    /// Take one sample (in time order).
+    pub fn push(&mut self, s: &Sample) {
+        if self
+            .window
+            .t
+            .first()
+            .is_some_and(|&t0| s.t_s - t0 >= WINDOW_S)
+        {
+            self.judge();
+        }
+        self.window.push(s);
+    }
+
+    /// Judge the window and start the next.
+    fn judge(&mut self) {
+        let w = &self.window;
+        if w.complete && w.t.len() >= MIN_WINDOW_SAMPLES {
+            self.judged += 1;
+            let supply = w.supply.iter().sum::<f64>() / w.supply.len() as f64;
+            let swing = rms(&about_line(&w.t, &w.p_piston)).max(rms(&about_line(&w.t, &w.p_rod)));
+            let u = about_line(&w.t, &w.command);
+            let command_swing = rms(&u);
+            if supply > 0.0
+                && swing >= CHAMBER_SWING_SHARE * supply
+                && command_swing >= COMMAND_SWING
+            {
+                // Half a σ of hysteresis: noise on the command adds no cycles.
+                let (n, span) = cycles(&w.t, &u, 0.5 * command_swing);
+                self.oscillating += 1;
+                self.cycles += n;
+                self.cycles_s += span;
+                for (sum, v) in self.sums.iter_mut().zip([swing, command_swing, supply]) {
+                    *sum += v;
+                }
+            }
+        }
+        self.window.clear();
+    }
+
+    /// What was measured; `None` before a single complete window.
+    pub fn finish(mut self) -> Option<Oscillation> {
+        self.judge();
+        if self.judged == 0 {
+            return None;
+        }
+        let mean = |sum: f64| sum / self.oscillating.max(1) as f64;
+        Some(Oscillation {
+            share: self.oscillating as f64 / self.judged as f64,
+            windows: self.judged,
+            frequency_hz: if self.cycles_s > 0.0 {
+                self.cycles as f64 / self.cycles_s
+            } else {
+                0.0
+            },
+            chamber_swing_bar: mean(self.sums[0]),
+            command_swing: mean(self.sums[1]),
+            supply_bar: mean(self.sums[2]),
+        })
+    }
+}
+
+/// Measure the loop's oscillation over `samples`; `None` without a single
+/// complete window (supply, chamber pressures and command all read).
 pub fn measure(samples: &[Sample]) -> Option<Oscillation> {
-    let supply_bar = median(
-        samples
-            .iter()
-            .filter_map(|s| s.p_supply_bar.map(f64::from))
-            .filter(|p| p.is_finite())
-            .collect(),
-    );
-    if !(supply_bar > 0.0) {
-        return None;
-    }
-    let mut windows = Vec::new();
-    let mut w = Window::start();
+    let mut m = Meter::new();
     for s in samples {
-        if w.t.first().is_some_and(|&t0| s.t_s - t0 >= WINDOW_S) {
-            windows.push(std::mem::replace(&mut w, Window::start()));
-        }
-        w.push(s);
+        m.push(s);
     }
-    windows.push(w);
-    let (mut judged, mut cycles_total, mut cycles_s) = (0, 0, 0.0);
-    let (mut chamber, mut command) = (Vec::new(), Vec::new());
-    for w in windows
-        .iter()
-        .filter(|w| w.complete && w.t.len() >= MIN_WINDOW_SAMPLES)
-    {
-        judged += 1;
-        let swing = rms(&about_line(&w.t, &w.p_piston)).max(rms(&about_line(&w.t, &w.p_rod)));
-        let u = about_line(&w.t, &w.command);
-        let command_swing = rms(&u);
-        if swing >= CHAMBER_SWING_SHARE * supply_bar && command_swing >= COMMAND_SWING {
-            // Half a σ of hysteresis: noise on the command adds no cycles.
-            let (n, s) = cycles(&w.t, &u, 0.5 * command_swing);
-            cycles_total += n;
-            cycles_s += s;
-            chamber.push(swing);
-            command.push(command_swing);
-        }
-    }
-    if judged == 0 {
-        return None;
-    }
-    Some(Oscillation {
-        share: chamber.len() as f64 / judged as f64,
-        windows: judged,
-        frequency_hz: if cycles_s > 0.0 {
-            cycles_total as f64 / cycles_s
-        } else {
-            0.0
-        },
-        chamber_swing_bar: median(chamber),
-        command_swing: median(command),
-        supply_bar,
-    })
+    m.finish()
 }
 
 #[cfg(test)]
