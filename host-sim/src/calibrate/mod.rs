@@ -223,27 +223,32 @@ pub enum CalibrationError {
 }
 
 impl CalibrationError {
-    /// The same refusal with `cause` named first: what the engineer must
-    /// change before the recording can say more.
-    fn caused_by(self, cause: &str) -> Self {
-        let first = |why: String| {
-            format!("{cause}: stabilise the loop, then record again; as it is, {why}")
-        };
+    /// The same refusal with its reason rewritten by `reword` (errors
+    /// without a reason in words are returned as they are).
+    fn reworded(self, reword: impl FnOnce(String) -> String) -> Self {
         match self {
             Self::NotEnoughMotion { missing, report } => Self::NotEnoughMotion {
-                missing: first(missing),
+                missing: reword(missing),
                 report,
             },
             Self::PoorFit { why, report } => Self::PoorFit {
-                why: first(why),
+                why: reword(why),
                 report,
             },
             Self::ValidationFailed { why, report } => Self::ValidationFailed {
-                why: first(why),
+                why: reword(why),
                 report,
             },
             other => other,
         }
+    }
+
+    /// The same refusal with `cause` named first: what the engineer must
+    /// change before the recording can say more.
+    fn caused_by(self, cause: &str) -> Self {
+        self.reworded(|why| {
+            format!("{cause}: stabilise the loop, then record again; as it is, {why}")
+        })
     }
 
     /// The calibration report up to the refusal, if any.
@@ -395,21 +400,11 @@ fn calibrate_mechanics(
             let mut cal = partial.map_err(|partial| {
                 // Say both: why the full calibration was refused, and why
                 // keeping the valve and load did not pass either.
-                let also =
-                    format!("; a partial calibration (valve and load kept) failed too: {partial}");
-                match e {
-                    CalibrationError::NotEnoughMotion { missing, report } => {
-                        CalibrationError::NotEnoughMotion {
-                            missing: missing + &also,
-                            report,
-                        }
-                    }
-                    CalibrationError::PoorFit { why, report } => CalibrationError::PoorFit {
-                        why: why + &also,
-                        report,
-                    },
-                    other => other,
-                }
+                e.reworded(|why| {
+                    format!(
+                        "{why}; a partial calibration (valve and load kept) failed too: {partial}"
+                    )
+                })
             })?;
             cal.warnings.insert(
                 0,
