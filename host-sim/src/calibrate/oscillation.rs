@@ -12,29 +12,32 @@
 //! The recording is cut into [`WINDOW_S`] windows; in each, the chamber
 //! pressures and the valve command are taken about their least-squares
 //! line (a steady move or a pressure ramp leaves nothing). A window
-//! oscillates when a chamber pressure swings at least
-//! [`CHAMBER_SWING_SHARE`] of the supply pressure (1σ) while the command
-//! swings at least [`COMMAND_SWING`]: pump ripple moves the pressures
-//! without the command, a noisy command reading moves no pressure.
+//! oscillates when a chamber pressure swings (rms) at least
+//! [`CHAMBER_SWING_SHARE`] of the window's supply pressure while the
+//! command swings at least [`COMMAND_SWING`]: pump ripple moves the
+//! pressures without the command, a noisy command reading moves no
+//! pressure.
 
 use monitor::Sample;
 
 /// Length of the windows, s: several periods of a 10–30 Hz oscillation.
 pub const WINDOW_S: f64 = 0.2;
-/// Chamber-pressure swing (1σ about the window's trend), relative to the
-/// supply pressure, from which a window oscillates. On the development
-/// rigs' 60 s recordings, hunting loops swing 25–48 bar at 100 bar, a
-/// settled loop's valve steps 4–6 bar at 50 bar.
+/// Chamber-pressure swing (rms about the window's trend), relative to the
+/// supply pressure, from which a window oscillates. On the tuning rigs'
+/// 60 s calibration recordings, loops that hunt swing the chambers by
+/// 26–46 bar at 100 bar; at 50 bar a settled loop's valve steps move them
+/// by 4–6 bar.
 pub const CHAMBER_SWING_SHARE: f64 = 0.10;
-/// Valve-command swing (1σ about the window's trend) from which a window
-/// oscillates: 0.5 % of the travel, hunting loops 2–7 %.
+/// Valve-command swing (rms about the window's trend) from which a window
+/// oscillates: 0.5 % of the travel; the hunting loops above, 2–6 %.
 pub const COMMAND_SWING: f64 = 0.005;
 /// Share of the recording from which the report warns: the monitor then
 /// has no evidence for that share of the machine's work.
 pub const WARN_SHARE: f64 = 0.15;
 /// Share from which a refused calibration names the oscillation as its
-/// cause: 8 development cells whose loops hunt 70–95 % of the time were
-/// refused for want of quasi-steady moves or of evidence.
+/// cause: 8 tuning cells whose loops hunt 71–95 % of the time were
+/// refused for want of quasi-steady moves or of evidence; the calibrated
+/// cells that hunt do so for at most 59 %.
 pub const CAUSE_SHARE: f64 = 0.5;
 /// Fewest readings a window needs to be judged.
 const MIN_WINDOW_SAMPLES: usize = 20;
