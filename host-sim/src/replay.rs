@@ -284,7 +284,7 @@ pub fn replay<T: Real, R: BufRead>(
         loop_oscillation_share: None,
         loop_oscillation_hz: None,
     };
-    let mut loop_meter = oscillation::Meter::new();
+    let mut loop_meter = oscillation::Meter::default();
     let (mut inconclusive, mut nis_sum, mut nis_n) = (0u64, 0.0, 0u64);
     let t0 = first.as_ref().map(|s| s.t_s);
     let mut mismatch = 0u64;

@@ -87,22 +87,20 @@ impl Oscillation {
     }
 }
 
-/// `y` less its least-squares line in `t`.
-fn about_line(t: &[f64], y: &[f64]) -> Vec<f64> {
+/// `y` less its least-squares line in `t`, sample by sample.
+fn about_line<'a>(t: &'a [f64], y: &'a [f64]) -> impl Iterator<Item = f64> + 'a {
     let n = t.len() as f64;
     let (tm, ym) = (t.iter().sum::<f64>() / n, y.iter().sum::<f64>() / n);
     let stt: f64 = t.iter().map(|a| (a - tm) * (a - tm)).sum();
     let sty: f64 = t.iter().zip(y).map(|(a, b)| (a - tm) * (b - ym)).sum();
     let slope = if stt > 0.0 { sty / stt } else { 0.0 };
-    t.iter()
-        .zip(y)
-        .map(|(a, b)| b - ym - slope * (a - tm))
-        .collect()
+    t.iter().zip(y).map(move |(a, b)| b - ym - slope * (a - tm))
 }
 
-/// Root mean square of `r`.
-fn rms(r: &[f64]) -> f64 {
-    (r.iter().map(|x| x * x).sum::<f64>() / r.len() as f64).sqrt()
+/// Root mean square of `r` (0 if empty).
+fn rms(r: impl Iterator<Item = f64>) -> f64 {
+    let (sum, n) = r.fold((0.0, 0usize), |(s, n), x| (s + x * x, n + 1));
+    (sum / n.max(1) as f64).sqrt()
 }
 
 /// Whole cycles of `r` (at times `t`) and the time they took, s: between
@@ -110,11 +108,11 @@ fn rms(r: &[f64]) -> f64 {
 /// counts once the signal went below −band and then above +band, at the
 /// same phase every cycle; the window's partial cycles at either end do
 /// not bias the frequency).
-fn cycles(t: &[f64], r: &[f64], band: f64) -> (usize, f64) {
+fn cycles(t: &[f64], r: impl Iterator<Item = f64>, band: f64) -> (usize, f64) {
     let mut below = false;
     let mut ups = 0usize;
     let (mut first, mut last) = (0.0, 0.0);
-    for (&ti, &x) in t.iter().zip(r) {
+    for (&ti, x) in t.iter().zip(r) {
         if x < -band {
             below = true;
         } else if x > band && below {
@@ -129,29 +127,31 @@ fn cycles(t: &[f64], r: &[f64], band: f64) -> (usize, f64) {
     (ups.saturating_sub(1), last - first)
 }
 
-/// One window's readings: time, supply, piston and rod pressure, command.
+/// One window's readings: time, piston and rod pressure, command, and the
+/// supply pressure's sum.
 #[derive(Default)]
 struct Window {
     t: Vec<f64>,
-    supply: Vec<f64>,
     p_piston: Vec<f64>,
     p_rod: Vec<f64>,
     command: Vec<f64>,
-    complete: bool,
+    supply_sum: f64,
+    /// A reading was missing or not finite: the window is not judged.
+    gap: bool,
 }
 
 impl Window {
     fn clear(&mut self) {
         for v in [
             &mut self.t,
-            &mut self.supply,
             &mut self.p_piston,
             &mut self.p_rod,
             &mut self.command,
         ] {
             v.clear();
         }
-        self.complete = true;
+        self.supply_sum = 0.0;
+        self.gap = false;
     }
 
     fn push(&mut self, s: &Sample) {
@@ -164,12 +164,12 @@ impl Window {
         ) {
             (Some(ps), Some(a), Some(b), Some(u)) => {
                 self.t.push(s.t_s);
-                self.supply.push(ps);
+                self.supply_sum += ps;
                 self.p_piston.push(a);
                 self.p_rod.push(b);
                 self.command.push(u);
             }
-            _ => self.complete = false,
+            _ => self.gap = true,
         }
     }
 }
@@ -190,13 +190,6 @@ pub struct Meter {
 }
 
 impl Meter {
-    /// A meter that has seen nothing.
-    pub fn new() -> Self {
-        let mut m = Self::default();
-        m.window.clear();
-        m
-    }
-
     /// Take one sample (in time order).
     pub fn push(&mut self, s: &Sample) {
         if self
@@ -213,18 +206,17 @@ impl Meter {
     /// Judge the window and start the next.
     fn judge(&mut self) {
         let w = &self.window;
-        if w.complete && w.t.len() >= MIN_WINDOW_SAMPLES {
+        if !w.gap && w.t.len() >= MIN_WINDOW_SAMPLES {
             self.judged += 1;
-            let supply = w.supply.iter().sum::<f64>() / w.supply.len() as f64;
-            let swing = rms(&about_line(&w.t, &w.p_piston)).max(rms(&about_line(&w.t, &w.p_rod)));
-            let u = about_line(&w.t, &w.command);
-            let command_swing = rms(&u);
+            let supply = w.supply_sum / w.t.len() as f64;
+            let swing = rms(about_line(&w.t, &w.p_piston)).max(rms(about_line(&w.t, &w.p_rod)));
+            let command_swing = rms(about_line(&w.t, &w.command));
             if supply > 0.0
                 && swing >= CHAMBER_SWING_SHARE * supply
                 && command_swing >= COMMAND_SWING
             {
                 // Half a σ of hysteresis: noise on the command adds no cycles.
-                let (n, span) = cycles(&w.t, &u, 0.5 * command_swing);
+                let (n, span) = cycles(&w.t, about_line(&w.t, &w.command), 0.5 * command_swing);
                 self.oscillating += 1;
                 self.cycles += n;
                 self.cycles_s += span;
@@ -261,7 +253,7 @@ impl Meter {
 /// Measure the loop's oscillation over `samples`; `None` without a single
 /// complete window (supply, chamber pressures and command all read).
 pub fn measure(samples: &[Sample]) -> Option<Oscillation> {
-    let mut m = Meter::new();
+    let mut m = Meter::default();
     for s in samples {
         m.push(s);
     }
