@@ -243,14 +243,6 @@ impl CalibrationError {
         }
     }
 
-    /// The same refusal with `cause` named first: what the engineer must
-    /// change before the recording can say more.
-    fn caused_by(self, cause: &str) -> Self {
-        self.reworded(|why| {
-            format!("{cause}: stabilise the loop, then record again; as it is, {why}")
-        })
-    }
-
     /// The calibration report up to the refusal, if any.
     pub fn report(&self) -> Option<&str> {
         match self {
@@ -344,10 +336,20 @@ pub struct Calibration {
 /// names it as the cause: more recording of the same machine would not
 /// help.
 pub fn calibrate(samples: &[Sample], start: &Params) -> Result<Calibration, CalibrationError> {
-    let oscillation = oscillation::measure(samples);
-    calibrate_bounded(samples, start, oscillation.as_ref()).map_err(|e| match &oscillation {
-        Some(o) if o.is_the_cause() => e.caused_by(&o.describe()),
-        _ => e,
+    calibrate_given(samples, start, oscillation::measure(samples).as_ref())
+}
+
+/// [`calibrate`] with the loop's oscillation over `samples` already
+/// measured ([`oscillation::measure`]), for a caller that reports it
+/// whatever comes of the calibration.
+pub fn calibrate_given(
+    samples: &[Sample],
+    start: &Params,
+    oscillation: Option<&Oscillation>,
+) -> Result<Calibration, CalibrationError> {
+    calibrate_bounded(samples, start, oscillation).map_err(|e| match oscillation {
+        Some(o) => e.reworded(|why| o.refusal(&why)),
+        None => e,
     })
 }
 

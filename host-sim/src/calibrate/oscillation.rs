@@ -85,6 +85,20 @@ impl Oscillation {
     pub fn is_the_cause(&self) -> bool {
         self.share >= CAUSE_SHARE
     }
+
+    /// A refusal's reason `why`, with the oscillation named first where it
+    /// is the cause: what the engineer must change before the recording
+    /// can say more.
+    pub fn refusal(&self, why: &str) -> String {
+        if self.is_the_cause() {
+            format!(
+                "{}: stabilise the loop, then record again; as it is, {why}",
+                self.describe()
+            )
+        } else {
+            why.to_string()
+        }
+    }
 }
 
 /// `y` less its least-squares line in `t`, sample by sample.

@@ -91,22 +91,17 @@ impl Calibration {
             );
         }
         if let Some(o) = &self.oscillation {
-            let _ = if o.share > 0.0 {
-                writeln!(
-                    s,
-                    "\nLoop oscillation ({} windows of {} s judged): {}.",
-                    o.windows,
-                    super::oscillation::WINDOW_S,
-                    o.describe()
-                )
+            let what = if o.share > 0.0 {
+                o.describe()
             } else {
-                writeln!(
-                    s,
-                    "\nLoop oscillation ({} windows of {} s judged): none.",
-                    o.windows,
-                    super::oscillation::WINDOW_S
-                )
+                "none".into()
             };
+            let _ = writeln!(
+                s,
+                "\nLoop oscillation ({} windows of {} s judged): {what}.",
+                o.windows,
+                super::oscillation::WINDOW_S
+            );
         }
         if let Some(v) = &self.validation {
             let alarm = self.params.alarm.alarm_lpm;
@@ -167,14 +162,11 @@ impl Calibration {
                 let _ = writeln!(s, "\nVerdict: accepted.");
             }
             Some(why) => {
-                let cause = match &self.oscillation {
-                    Some(o) if o.is_the_cause() => format!("{}: ", o.describe()),
-                    _ => String::new(),
-                };
-                let _ = writeln!(
-                    s,
-                    "\nVerdict: refused because {cause}{why}. Nothing written."
-                );
+                let why = self
+                    .oscillation
+                    .as_ref()
+                    .map_or_else(|| why.clone(), |o| o.refusal(why));
+                let _ = writeln!(s, "\nVerdict: refused because {why}. Nothing written.");
             }
         }
         s

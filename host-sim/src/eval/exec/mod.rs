@@ -4,7 +4,7 @@
 
 use super::plan::{CellPlan, Plan, PlanConfig};
 use super::{Cell, Job, RunSpec};
-use crate::calibrate::{calibrate, oscillation, Fit};
+use crate::calibrate::{calibrate_given, oscillation, Fit};
 use anyhow::{Context, Result};
 use monitor::Params;
 use serde::Serialize;
@@ -284,8 +284,9 @@ pub fn calibrate_cell(cp: &CellPlan, cfg: &ExecConfig) -> Result<CellResult> {
         let (text, _) = recording_for(&cp.calibration, cfg.cache.as_deref())?;
         let samples = samples_of(&text)?;
         drop(text);
-        out.loop_oscillation_share = oscillation::measure(&samples).map(|o| o.share);
-        match calibrate(&samples, &start) {
+        let loop_oscillation = oscillation::measure(&samples);
+        out.loop_oscillation_share = loop_oscillation.as_ref().map(|o| o.share);
+        match calibrate_given(&samples, &start, loop_oscillation.as_ref()) {
             Ok(c) => {
                 out.status = "calibrated";
                 out.report = Some(c.report());
