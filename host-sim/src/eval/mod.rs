@@ -59,6 +59,21 @@ pub const SURVEY_RIGS: [u64; 48] = {
     seeds
 };
 
+/// Second survey rigs (seeds 79–126): drawn from the same population and
+/// first run, untuned, on 2026-12-05 to check whether the held-out rigs'
+/// false-alarm rate is chance or a mechanism the other development rigs
+/// never showed; from then on tuned on like them (reported separately).
+/// Disjoint from the other sets.
+pub const SURVEY2_RIGS: [u64; 48] = {
+    let mut seeds = [0; 48];
+    let mut i = 0;
+    while i < seeds.len() {
+        seeds[i] = 79 + i as u64;
+        i += 1;
+    }
+    seeds
+};
+
 /// A set of rigs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -71,6 +86,8 @@ pub enum RigSet {
     Wide,
     /// [`SURVEY_RIGS`].
     Survey,
+    /// [`SURVEY2_RIGS`].
+    Survey2,
 }
 
 impl RigSet {
@@ -81,6 +98,7 @@ impl RigSet {
             Self::Holdout => &HOLDOUT_RIGS,
             Self::Wide => &WIDE_RIGS,
             Self::Survey => &SURVEY_RIGS,
+            Self::Survey2 => &SURVEY2_RIGS,
         }
     }
 
@@ -91,6 +109,7 @@ impl RigSet {
             Self::Holdout => "holdout",
             Self::Wide => "wide",
             Self::Survey => "survey",
+            Self::Survey2 => "survey2",
         }
     }
 }
@@ -109,6 +128,9 @@ pub enum SetChoice {
     /// A larger sample of development rigs (seeds 31–78), for rare
     /// failures (use with `--quick`).
     Survey,
+    /// A second survey sample (seeds 79–126), first run untuned on
+    /// 2026-12-05 (use with `--quick`).
+    Survey2,
 }
 
 impl SetChoice {
@@ -120,6 +142,7 @@ impl SetChoice {
             Self::Both => vec![RigSet::Dev, RigSet::Holdout],
             Self::Wide => vec![RigSet::Wide],
             Self::Survey => vec![RigSet::Survey],
+            Self::Survey2 => vec![RigSet::Survey2],
         }
     }
 }

@@ -115,7 +115,13 @@ pub fn markdown(ev: &Evaluation) -> String {
             "**calibration off**: every cell uses the start parameters"
         },
     );
-    for set in [RigSet::Dev, RigSet::Wide, RigSet::Survey, RigSet::Holdout] {
+    for set in [
+        RigSet::Dev,
+        RigSet::Wide,
+        RigSet::Survey,
+        RigSet::Survey2,
+        RigSet::Holdout,
+    ] {
         let cells: Vec<&CellResult> = ev.cells.iter().filter(|c| c.cell.set == set).collect();
         if cells.is_empty() {
             continue;
@@ -136,6 +142,7 @@ fn set_report(out: &mut String, set: RigSet, cells: &[&CellResult], runs: &[&Run
         RigSet::Holdout => "Held-out rigs",
         RigSet::Wide => "Further development rigs",
         RigSet::Survey => "Survey development rigs",
+        RigSet::Survey2 => "Second survey development rigs",
     };
     let _ = writeln!(
         out,
