@@ -23,7 +23,7 @@ pub struct Args {
     #[arg(long, value_delimiter = ',', default_values_t = [25.0, 40.0])]
     temp: Vec<f64>,
     /// The smaller development matrix (one condition per rig, fewer
-    /// sizes, a 120 s hold, four faults).
+    /// sizes, a 120 s hold, five faults).
     #[arg(long)]
     quick: bool,
     /// Worker threads [default: the available cores].
