@@ -456,6 +456,24 @@ fn temp_column_on_even_rigs_and_quick_covers_every_condition() {
     conds.sort_unstable();
     conds.dedup();
     assert_eq!(conds.len(), 4, "{conds:?}");
+    // Every cell runs the faults the issue names, the valve command's
+    // open wire among them (the held-out rigs run only `--quick`).
+    for c in &q.cells {
+        let kinds: Vec<FaultKind> = q
+            .specs()
+            .filter(|s| s.cell == c.cell)
+            .filter_map(|s| s.fault)
+            .collect();
+        for kind in [
+            FaultKind::SpikesXPiston,
+            FaultKind::OpenWirePPiston,
+            FaultKind::OpenWireUValve,
+            FaultKind::FrozenXPiston,
+            FaultKind::NanTime,
+        ] {
+            assert!(kinds.contains(&kind), "{:?} lacks {kind:?}", c.cell);
+        }
+    }
     // Each supply and each temperature with and without the column.
     for pick in [|c: &Cell| c.supply_bar, |c: &Cell| c.temp_c] {
         let mut seen: Vec<(u64, bool)> = q
