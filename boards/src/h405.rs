@@ -9,7 +9,7 @@
 //! | rod-chamber pressure p_rod | PA2 | IN2 | 4–20 mA, 0–250 bar, 120 Ω shunt |
 //! | tank pressure p_tank | PA3 | IN3 | 4–20 mA, 0–16 bar, 120 Ω shunt |
 //! | piston position x_piston | PC0 | IN10 | 4–20 mA, 0–200 mm, 120 Ω shunt |
-//! | valve command u_valve | PC1 | IN11 | ±10 V via 100 kΩ / 30.1 kΩ to 3.3 V / 43.2 kΩ to GND |
+//! | valve command u_valve | PC1 | IN11 | ±10 V via 100 kΩ / 30.1 kΩ to 3.3 V / 43.2 kΩ to GND; 100 kΩ from the terminal to the 24 V loop supply (wire break → rail) |
 //! | oil temperature temp_oil (optional) | PC2 | IN12 | 4–20 mA, −20…130 °C, 120 Ω shunt |
 //! | fail-safe relay driver | PB12 | | high = energised = healthy; 100 kΩ pull-down on the driver input |
 //! | relay read-back | PB13 | | the relay's auxiliary NO contact to GND, 10 kΩ pull-up to 3.3 V: low = energised |
@@ -98,6 +98,40 @@ const fn pressure(full_scale_bar: f32) -> Input {
     })
 }
 
+/// The valve-command input's divider (`FRONTEND`'s `u_valve`).
+const U_VALVE_DIVIDER: OffsetDivider = OffsetDivider {
+    r_in_ohm: 100e3,
+    r_up_ohm: 30.1e3,
+    r_down_ohm: 43.2e3,
+    units_per_volt: 0.1,
+};
+
+/// Wire-break bias of the valve-command input, Ω: from the input terminal
+/// to the transmitters' loop supply ([`LOOP_SUPPLY_V`]). Without it an
+/// open input floats to the divider's own bias, 1.94 V at the terminal: a
+/// command of +0.19 that nothing contradicts while the piston holds. With
+/// it an open input is pulled past +10 V and the pin onto the 3.3 V clamp,
+/// a code at the rail, which the front end reports as a fault
+/// (`InputFault::Saturated`). A driven input moves by (24 V − u)·R_source
+/// ⁄ 100 kΩ: 24 mV (a command offset of 0.0024, which calibration's null
+/// takes up) behind a 100 Ω controller output.
+pub const U_VALVE_BREAK_BIAS_OHM: f32 = 100e3;
+
+/// The 4–20 mA transmitters' loop supply, V (nominal; the bias must reach
+/// the rail down to −10 %).
+pub const LOOP_SUPPLY_V: f32 = 24.0;
+
+/// Pin voltage of the valve-command input with its wire open and the loop
+/// supply at `supply_v`, V (before the clamp): the bias against the
+/// divider's Thévenin equivalent at the pin.
+pub fn u_valve_open_pin_volts(supply_v: f32) -> f32 {
+    let d = U_VALVE_DIVIDER;
+    let vref = FRONTEND.adc.vref_v;
+    let r_th = 1.0 / (1.0 / d.r_up_ohm + 1.0 / d.r_down_ohm);
+    let v_th = vref * d.r_down_ohm / (d.r_up_ohm + d.r_down_ohm);
+    v_th + (supply_v - v_th) * r_th / (r_th + d.r_in_ohm + U_VALVE_BREAK_BIAS_OHM)
+}
+
 /// The analogue front end, in `Channel::ALL` order.
 pub const FRONTEND: FrontendConfig = FrontendConfig {
     adc: AdcSpec {
@@ -114,12 +148,7 @@ pub const FRONTEND: FrontendConfig = FrontendConfig {
             at_4ma: 0.0,
             at_20ma: 0.2,
         }),
-        Input::Divider(OffsetDivider {
-            r_in_ohm: 100e3,
-            r_up_ohm: 30.1e3,
-            r_down_ohm: 43.2e3,
-            units_per_volt: 0.1,
-        }),
+        Input::Divider(U_VALVE_DIVIDER),
         if TEMP_OIL_FITTED {
             Input::Loop(CurrentLoop {
                 shunt_ohm: SHUNT_OHM,
@@ -132,3 +161,42 @@ pub const FRONTEND: FrontendConfig = FrontendConfig {
     ],
     debounce: DebounceConfig::DEFAULT,
 };
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_open_valve_command_wire_reads_at_the_rail_down_to_a_low_loop_supply() {
+        let adc = FRONTEND.adc;
+        for supply in [0.9 * LOOP_SUPPLY_V, LOOP_SUPPLY_V, 1.1 * LOOP_SUPPLY_V] {
+            let pin = u_valve_open_pin_volts(supply);
+            // The clamp holds the pin at VREF or above: the top code.
+            let code = adc.counts(pin.min(adc.vref_v));
+            assert!(
+                pin > adc.vref_v && adc.at_rail(code),
+                "{supply} V: pin {pin} V"
+            );
+        }
+        // Without the bias the open input reads the divider's own bias:
+        // +1.94 V at the terminal, a command of +0.19, inside the range.
+        let d = U_VALVE_DIVIDER;
+        let vref = adc.vref_v;
+        let floating = vref * d.r_down_ohm / (d.r_up_ohm + d.r_down_ohm);
+        let command = d.input_volts(floating, vref) * d.units_per_volt;
+        assert!((command - 0.194).abs() < 0.002, "{command}");
+        assert!(!adc.at_rail(adc.counts(floating)));
+    }
+
+    #[test]
+    fn the_bias_moves_a_driven_command_by_a_few_thousandths() {
+        // A controller output of 100 Ω at −10, 0 and +10 V.
+        for u in [-10.0f32, 0.0, 10.0] {
+            let shift = (LOOP_SUPPLY_V - u) * 100.0 / U_VALVE_BREAK_BIAS_OHM;
+            assert!(
+                shift * U_VALVE_DIVIDER.units_per_volt < 0.004,
+                "{u} V: {shift} V"
+            );
+        }
+    }
+}
