@@ -49,30 +49,25 @@ pub const WIDE_RIGS: [u64; 24] = [
 /// Survey rigs: a larger sample of the same population (seeds 31–78),
 /// to look for rare failures with `--quick` (tuned on like the other
 /// development rigs; reported separately). Disjoint from the other sets.
-pub const SURVEY_RIGS: [u64; 48] = {
-    let mut seeds = [0; 48];
-    let mut i = 0;
-    while i < seeds.len() {
-        seeds[i] = 31 + i as u64;
-        i += 1;
-    }
-    seeds
-};
+pub const SURVEY_RIGS: [u64; 48] = consecutive(31);
 
 /// Second survey rigs (seeds 79–126): drawn from the same population and
 /// first run, untuned, on 2026-12-05 to check whether the held-out rigs'
 /// false-alarm rate is chance or a mechanism the other development rigs
 /// never showed; from then on tuned on like them (reported separately).
 /// Disjoint from the other sets.
-pub const SURVEY2_RIGS: [u64; 48] = {
-    let mut seeds = [0; 48];
+pub const SURVEY2_RIGS: [u64; 48] = consecutive(79);
+
+/// `N` consecutive seeds from `first`.
+const fn consecutive<const N: usize>(first: u64) -> [u64; N] {
+    let mut seeds = [0; N];
     let mut i = 0;
-    while i < seeds.len() {
-        seeds[i] = 79 + i as u64;
+    while i < N {
+        seeds[i] = first + i as u64;
         i += 1;
     }
     seeds
-};
+}
 
 /// A set of rigs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
