@@ -50,6 +50,9 @@ pub struct ReplayAdc {
     block: [u16; BLOCK_LEN],
     /// Start the recording over after its last block, for ever.
     looping: bool,
+    /// From this block on, this channel converts to this code on every
+    /// scan (a broken input).
+    broken: Option<(u32, usize, u16)>,
 }
 
 impl ReplayAdc {
@@ -64,6 +67,17 @@ impl ReplayAdc {
             next: 0,
             block: [0; BLOCK_LEN],
             looping: false,
+            broken: None,
+        }
+    }
+
+    /// [`Self::start`] with `channel` converting to `code` on every scan
+    /// from block `from` on.
+    #[allow(dead_code)] // the open-wire test's only
+    pub fn start_broken(case: &'static EmuCase, from: u32, channel: usize, code: u16) -> Self {
+        Self {
+            broken: Some((from, channel, code)),
+            ..Self::start(case)
         }
     }
 
@@ -83,6 +97,11 @@ impl ReplayAdc {
         for (scan, codes) in self.block.chunks_exact_mut(CHANNELS).enumerate() {
             for (code, &sum) in codes.iter_mut().zip(&sums) {
                 *code = sum / scans + u16::from((scan as u16) < sum % scans);
+            }
+            if let Some((from, channel, broken)) = self.broken {
+                if k >= from {
+                    codes[channel] = broken;
+                }
             }
         }
     }

@@ -50,8 +50,11 @@ use board::{
 };
 use case::EmuCase;
 use check::Expect;
+use firmware::board_map::{u_valve_open_pin_volts, LOOP_SUPPLY_V};
 use monitor::device::diagnostics::reference::ReferenceConfig;
 use monitor::device::diagnostics::DeviceFault;
+use monitor::signal::ne43::DebounceConfig;
+use monitor::Channel;
 
 static SHARED: Shared = Shared::new();
 static RELAY: RecordingRelay = RecordingRelay::new();
@@ -127,14 +130,20 @@ pub enum Injection {
     /// VREFINT converts to this code (the supervisor's reference check
     /// must find the ADC reference out of range).
     Vrefint(u16),
+    /// The valve-command wire breaks: its input converts to the code the
+    /// board map's wire-break bias gives an open input
+    /// ([`open_command_wire_code`]), and the front end must fault the
+    /// channel.
+    OpenCommandWire,
 }
 
 impl Injection {
-    /// The device fault the firmware must report.
-    fn fault(self) -> DeviceFault {
+    /// The device fault the firmware must report, if a device fault.
+    fn device_fault(self) -> Option<DeviceFault> {
         match self {
-            Self::SelfTest(f) => f,
-            Self::Vrefint(_) => DeviceFault::AdcReference,
+            Self::SelfTest(f) => Some(f),
+            Self::Vrefint(_) => Some(DeviceFault::AdcReference),
+            Self::OpenCommandWire => None,
         }
     }
 
@@ -149,6 +158,12 @@ impl Injection {
         const MARGIN: Duration = Duration::from_millis(35);
         match self {
             Self::SelfTest(_) => (Duration::from_ticks(0), MARGIN),
+            // The front end's debounce of consecutive bad blocks.
+            Self::OpenCommandWire => {
+                let blocks = u64::from(DebounceConfig::DEFAULT.fault_samples);
+                let period = Duration::from_micros(u64::from(app::SAMPLE_PERIOD_US));
+                (Duration::from_ticks(0), period * blocks as u32 + MARGIN)
+            }
             Self::Vrefint(_) => {
                 let readings = u32::from(ReferenceConfig::DEFAULT.debounce);
                 let every = CHECK_PERIOD * REFERENCE_EVERY;
@@ -164,14 +179,15 @@ impl Injection {
 async fn fault_checker(case: &'static EmuCase, t0: Instant, injection: Injection, at: Instant) {
     let period = Duration::from_micros(u64::from(case.sample_period_us));
     Timer::at(t0 + period * (case.samples - 1) + SETTLE).await;
-    let fault = injection.fault();
-    let passed = record::with(|log| check::device_fault::run(log, fault, at, injection.reaction()));
+    let reaction = injection.reaction();
+    let passed = record::with(|log| match injection.device_fault() {
+        Some(fault) => check::device_fault::run(log, fault, at, reaction),
+        None => check::sensor_fault::run(log, Channel::UValve, at, reaction),
+    });
     if passed {
         println!(
-            "firmware on the emulated board, case {} with {:?}, device fault {}: all checks passed",
-            case.name,
-            injection,
-            fault.name()
+            "firmware on the emulated board, case {} with {:?}: all checks passed",
+            case.name, injection
         );
     }
     exit(passed)
@@ -289,6 +305,33 @@ pub fn run_with_vrefint(case: &'static EmuCase, code: u16) -> ! {
     run_with(case, Some(Injection::Vrefint(code)), Node::DEFAULT)
 }
 
+/// Replay `case` with the valve-command wire breaking 100 ms after the
+/// relay was first energised, and check that the front end faults it.
+#[allow(dead_code)]
+pub fn run_with_open_command_wire(case: &'static EmuCase) -> ! {
+    run_with(case, Some(Injection::OpenCommandWire), Node::DEFAULT)
+}
+
+/// The code an open valve-command input converts to on this board: the
+/// wire-break bias's pin voltage, held at VREF by the input clamp.
+pub fn open_command_wire_code() -> u16 {
+    let adc = FRONTEND.adc;
+    let pin = u_valve_open_pin_volts(LOOP_SUPPLY_V).min(adc.vref_v);
+    // Nearest code (no `f32::round` without std; the code is positive).
+    (adc.counts(pin) + 0.5) as u16
+}
+
+/// The sample 100 ms after `case` first energises the relay (the golden's
+/// healthy claim): where a test injects its fault.
+fn injection_sample(case: &EmuCase) -> u32 {
+    let energised = case
+        .alarm_changes()
+        .find(|(_, a)| a.relay_energised)
+        .map(|(k, _)| k)
+        .expect("the case energises the relay");
+    energised + 100
+}
+
 fn run_with(case: &'static EmuCase, injection: Option<Injection>, node: Node) -> ! {
     let mut nvic = power_on(case);
     let mut params = golden_params(case.sample_period_s, case.warm_up_s);
@@ -300,7 +343,15 @@ fn run_with(case: &'static EmuCase, injection: Option<Injection>, node: Node) ->
     };
     let pipeline = pipeline(&params);
     let (high, low) = start_executors(&mut nvic);
-    let source = ReplayAdc::start(case);
+    let source = match injection {
+        Some(Injection::OpenCommandWire) => ReplayAdc::start_broken(
+            case,
+            injection_sample(case),
+            Channel::UValve as usize,
+            open_command_wire_code(),
+        ),
+        _ => ReplayAdc::start(case),
+    };
     start_tasks(
         case,
         injection,
@@ -409,27 +460,23 @@ fn start_tasks(
     // The injection: 100 ms after the host's reference first energises
     // the relay (the golden's healthy claim).
     let inject = injection.map(|i| {
-        let energised = case
-            .alarm_changes()
-            .find(|(_, a)| a.relay_energised)
-            .map(|(k, _)| k)
-            .expect("the case energises the relay");
+        let k = injection_sample(case);
         let (_, latest) = i.reaction();
         assert!(
-            u64::from(energised + 150) + latest.as_millis() < u64::from(case.samples),
+            u64::from(k + 50) + latest.as_millis() < u64::from(case.samples),
             "too late in the case to inject"
         );
         let period = Duration::from_micros(u64::from(case.sample_period_us));
-        (t0 + period * (energised + 100), i)
+        (t0 + period * k, i)
     });
     let self_test = ScriptedSelfTest {
         fault: inject.and_then(|(at, i)| match i {
             Injection::SelfTest(f) => Some((at, f)),
-            Injection::Vrefint(_) => None,
+            _ => None,
         }),
         vrefint: inject.and_then(|(at, i)| match i {
             Injection::Vrefint(code) => Some((at, code)),
-            Injection::SelfTest(_) => None,
+            _ => None,
         }),
     };
     let supervisor = supervisor(RecordingWatchdog, &RELAY, RecordingLed::new(), self_test);

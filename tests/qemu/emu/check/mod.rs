@@ -8,6 +8,7 @@ pub mod device_fault;
 mod frames;
 mod outputs;
 pub mod selftest;
+pub mod sensor_fault;
 
 use core::fmt;
 
