@@ -7,6 +7,7 @@
 pub mod device_fault;
 mod frames;
 mod outputs;
+mod reaction;
 pub mod selftest;
 pub mod sensor_fault;
 
