@@ -407,7 +407,7 @@ pub fn print_summary(s: &ReplaySummary, out: &mut dyn Write) -> std::io::Result<
     }
     if let Some(share) = s
         .loop_oscillation_share
-        .filter(|&v| v >= oscillation::WARN_SHARE)
+        .filter(|&v| oscillation::share_worth_a_warning(v))
     {
         writeln!(
             out,

@@ -39,6 +39,13 @@ pub const WARN_SHARE: f64 = 0.15;
 /// refused for want of quasi-steady moves or of evidence; the calibrated
 /// cells that hunt do so for at most 59 %.
 pub const CAUSE_SHARE: f64 = 0.5;
+/// Does an oscillating share of a recording warrant a warning
+/// ([`WARN_SHARE`])? Calibration's report and `replay`'s summary (which
+/// keeps only the share) ask the same question.
+pub fn share_worth_a_warning(share: f64) -> bool {
+    share >= WARN_SHARE
+}
+
 /// Fewest readings a window needs to be judged.
 const MIN_WINDOW_SAMPLES: usize = 20;
 
@@ -76,9 +83,9 @@ impl Oscillation {
         )
     }
 
-    /// The report warns about it ([`WARN_SHARE`]).
+    /// The report warns about it ([`share_worth_a_warning`]).
     pub fn worth_a_warning(&self) -> bool {
-        self.share >= WARN_SHARE
+        share_worth_a_warning(self.share)
     }
 
     /// A refusal names it as the cause ([`CAUSE_SHARE`]).
@@ -101,14 +108,42 @@ impl Oscillation {
     }
 }
 
-/// `y` less its least-squares line in `t`, sample by sample.
-fn about_line<'a>(t: &'a [f64], y: &'a [f64]) -> impl Iterator<Item = f64> + 'a {
-    let n = t.len() as f64;
-    let (tm, ym) = (t.iter().sum::<f64>() / n, y.iter().sum::<f64>() / n);
-    let stt: f64 = t.iter().map(|a| (a - tm) * (a - tm)).sum();
-    let sty: f64 = t.iter().zip(y).map(|(a, b)| (a - tm) * (b - ym)).sum();
-    let slope = if stt > 0.0 { sty / stt } else { 0.0 };
-    t.iter().zip(y).map(move |(a, b)| b - ym - slope * (a - tm))
+/// The least-squares line of `y` in `t`: its centre (t̄, ȳ) and slope.
+struct Line {
+    t_mean: f64,
+    y_mean: f64,
+    slope: f64,
+}
+
+impl Line {
+    fn fit(t: &[f64], y: &[f64]) -> Self {
+        let n = t.len() as f64;
+        let (t_mean, y_mean) = (t.iter().sum::<f64>() / n, y.iter().sum::<f64>() / n);
+        let stt: f64 = t.iter().map(|a| (a - t_mean) * (a - t_mean)).sum();
+        let sty: f64 = t
+            .iter()
+            .zip(y)
+            .map(|(a, b)| (a - t_mean) * (b - y_mean))
+            .sum();
+        let slope = if stt > 0.0 { sty / stt } else { 0.0 };
+        Self {
+            t_mean,
+            y_mean,
+            slope,
+        }
+    }
+
+    /// `y` less the line, sample by sample.
+    fn residuals<'a>(&'a self, t: &'a [f64], y: &'a [f64]) -> impl Iterator<Item = f64> + 'a {
+        t.iter()
+            .zip(y)
+            .map(move |(a, b)| b - self.y_mean - self.slope * (a - self.t_mean))
+    }
+}
+
+/// Swing of `y` about its least-squares line in `t` (rms).
+fn swing_about_line(t: &[f64], y: &[f64]) -> f64 {
+    rms(Line::fit(t, y).residuals(t, y))
 }
 
 /// Root mean square of `r` (0 if empty).
@@ -223,14 +258,17 @@ impl Meter {
         if !w.gap && w.t.len() >= MIN_WINDOW_SAMPLES {
             self.judged += 1;
             let supply = w.supply_sum / w.t.len() as f64;
-            let swing = rms(about_line(&w.t, &w.p_piston)).max(rms(about_line(&w.t, &w.p_rod)));
-            let command_swing = rms(about_line(&w.t, &w.command));
+            let swing = swing_about_line(&w.t, &w.p_piston).max(swing_about_line(&w.t, &w.p_rod));
+            // The command's line once: its residuals give the swing and the cycles.
+            let command_line = Line::fit(&w.t, &w.command);
+            let command_swing = rms(command_line.residuals(&w.t, &w.command));
             if supply > 0.0
                 && swing >= CHAMBER_SWING_SHARE * supply
                 && command_swing >= COMMAND_SWING
             {
                 // Half a σ of hysteresis: noise on the command adds no cycles.
-                let (n, span) = cycles(&w.t, about_line(&w.t, &w.command), 0.5 * command_swing);
+                let residuals = command_line.residuals(&w.t, &w.command);
+                let (n, span) = cycles(&w.t, residuals, 0.5 * command_swing);
                 self.oscillating += 1;
                 self.cycles += n;
                 self.cycles_s += span;
