@@ -122,14 +122,10 @@ pub const U_VALVE_BREAK_BIAS_OHM: f32 = 100e3;
 pub const LOOP_SUPPLY_V: f32 = 24.0;
 
 /// Pin voltage of the valve-command input with its wire open and the loop
-/// supply at `supply_v`, V (before the clamp): the bias against the
-/// divider's Thévenin equivalent at the pin.
+/// supply at `supply_v`, V (before the clamp): the supply behind the bias
+/// resistor is the input's only source.
 pub fn u_valve_open_pin_volts(supply_v: f32) -> f32 {
-    let d = U_VALVE_DIVIDER;
-    let vref = FRONTEND.adc.vref_v;
-    let r_th = 1.0 / (1.0 / d.r_up_ohm + 1.0 / d.r_down_ohm);
-    let v_th = vref * d.r_down_ohm / (d.r_up_ohm + d.r_down_ohm);
-    v_th + (supply_v - v_th) * r_th / (r_th + d.r_in_ohm + U_VALVE_BREAK_BIAS_OHM)
+    U_VALVE_DIVIDER.pin_volts_behind(supply_v, U_VALVE_BREAK_BIAS_OHM, FRONTEND.adc.vref_v)
 }
 
 /// The analogue front end, in `Channel::ALL` order.

@@ -142,6 +142,15 @@ impl OffsetDivider {
     pub fn pin_volts(&self, input_v: f32, vref_v: f32) -> f32 {
         self.offset_v(vref_v) + input_v * self.gain()
     }
+
+    /// Pin voltage for a source of `source_v` behind `source_ohm` at the
+    /// input (for a board's design checks: an open input pulled by a bias
+    /// resistor is such a source), V.
+    pub fn pin_volts_behind(&self, source_v: f32, source_ohm: f32, vref_v: f32) -> f32 {
+        let g_in = 1.0 / (self.r_in_ohm + source_ohm);
+        (source_v * g_in + vref_v / self.r_up_ohm)
+            / (g_in + 1.0 / self.r_up_ohm + 1.0 / self.r_down_ohm)
+    }
 }
 
 #[cfg(test)]
@@ -211,6 +220,7 @@ mod tests {
         );
         for v in [-10.0f32, -3.3, 0.0, 5.0, 10.0] {
             assert!((d.input_volts(d.pin_volts(v, vref), vref) - v).abs() < 1e-4);
+            assert!((d.pin_volts_behind(v, 0.0, vref) - d.pin_volts(v, vref)).abs() < 1e-5);
         }
         let adc = AdcSpec {
             vref_v: vref,
