@@ -347,36 +347,31 @@ pub fn calibrate_given(
     start: &Params,
     oscillation: Option<&Oscillation>,
 ) -> Result<Calibration, CalibrationError> {
-    calibrate_bounded(samples, start, oscillation).map_err(|e| match oscillation {
-        Some(o) => e.reworded(|why| o.refusal(&why)),
-        None => e,
-    })
-}
-
-/// [`calibrate`], with the laminar bound and, failing that, without.
-fn calibrate_bounded(
-    samples: &[Sample],
-    start: &Params,
-    oscillation: Option<&Oscillation>,
-) -> Result<Calibration, CalibrationError> {
-    match calibrate_mechanics(samples, start, oscillation) {
+    // With the laminar bound and, failing that, without.
+    let result = match calibrate_mechanics(samples, start, oscillation) {
         Err(e @ (CalibrationError::PoorFit { .. } | CalibrationError::ValidationFailed { .. }))
             if start.filter.laminar_factor_min > 0.0 =>
         {
             let mut unbounded = start.clone();
             unbounded.filter.laminar_factor_min = UNBOUNDED_LAMINAR_FACTOR;
-            let mut cal = calibrate_mechanics(samples, &unbounded, oscillation)?;
-            cal.warnings.insert(
-                0,
-                format!(
-                    "healthy laminar leakage not bounded (filter.laminar_factor_min {UNBOUNDED_LAMINAR_FACTOR} instead of {}): with the bound, {e}",
-                    start.filter.laminar_factor_min
-                ),
-            );
-            Ok(cal)
+            calibrate_mechanics(samples, &unbounded, oscillation).map(|mut cal| {
+                cal.warnings.insert(
+                    0,
+                    format!(
+                        "healthy laminar leakage not bounded (filter.laminar_factor_min {UNBOUNDED_LAMINAR_FACTOR} instead of {}): with the bound, {e}",
+                        start.filter.laminar_factor_min
+                    ),
+                );
+                cal
+            })
         }
         r => r,
-    }
+    };
+    // Every refusal, the retry's too, names a hunting loop as its cause.
+    result.map_err(|e| match oscillation {
+        Some(o) => e.reworded(|why| o.refusal(&why)),
+        None => e,
+    })
 }
 
 /// [`calibrate`] with `start`'s laminar bound: full, else partial.
