@@ -90,7 +90,7 @@ fn main() -> anyhow::Result<()> {
             .map(std::io::BufWriter::new);
         if let Some(w) = tw.as_mut() {
             use std::io::Write;
-            writeln!(w, "t,q_int,q_ext,w,det_i,det_e,sd_i,sd_e,li,le,pH,pI,pE,pB,verdict,p3,p4,u,th_i,th_e,lam,g_ext,g_ret,thI_i,thE_e,v_true,lvl_i,lvl_e,health,vgd_e,vgd_r,v_healthy,v_both,region,sg_e,sg_r,s_thi,s_the,llH,llI,llE,llB,nisH,nisI,nisE,nisB")?;
+            writeln!(w, "t,q_int,q_ext,w,det_i,det_e,sd_i,sd_e,li,le,pH,pI,pE,pB,verdict,p3,p4,u,th_i,th_e,lam,g_ext,g_ret,thI_i,thE_e,v_true,lvl_i,lvl_e,health,vgd_e,vgd_r,v_healthy,v_both,region,sg_e,sg_r,s_thi,s_the,llH,llI,llE,llB,nisH,nisI,nisE,nisB,ps,pt,x")?;
         }
         let mut i = 0u64;
         while let Some((s, truth)) = rd.next_row()? {
@@ -133,7 +133,7 @@ fn main() -> anyhow::Result<()> {
                     use std::io::Write;
                     writeln!(
                         w,
-                        "{:.3},{:.3},{:.3},{:.3},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{},{:.2},{:.2},{:.3},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:#x},{:.4},{:.4},{:.5},{:.5},{},{:.4},{:.4},{:.4},{:.4},{:.1},{:.1},{:.1},{:.1},{:.2},{:.2},{:.2},{:.2}",
+                        "{:.3},{:.3},{:.3},{:.3},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{},{:.2},{:.2},{:.3},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:#x},{:.4},{:.4},{:.5},{:.5},{},{:.4},{:.4},{:.4},{:.4},{:.1},{:.1},{:.1},{:.1},{:.2},{:.2},{:.2},{:.2},{:.2},{:.2},{:.4}",
                         s.t_s,
                         truth[0],
                         truth[1],
@@ -149,7 +149,7 @@ fn main() -> anyhow::Result<()> {
                         p[2],
                         p[3],
                         st.verdict.name(),
-                        fs.0, fs.1, s.u_valve.unwrap_or(f32::NAN), fs.2, fs.3, fs.4, fs.5, fs.6, fs.7, fs.8, truth[2], st.alarm_level_lpm[0], st.alarm_level_lpm[1], st.health, st.valve_gain_deviation[0], st.valve_gain_deviation[1], vel[0], vel[1], m.region(), sd[0], sd[1], sd[2], sd[3], st.evidence[0].log_likelihood, st.evidence[1].log_likelihood, st.evidence[2].log_likelihood, st.evidence[3].log_likelihood, st.evidence[0].mean_nis, st.evidence[1].mean_nis, st.evidence[2].mean_nis, st.evidence[3].mean_nis
+                        fs.0, fs.1, s.u_valve.unwrap_or(f32::NAN), fs.2, fs.3, fs.4, fs.5, fs.6, fs.7, fs.8, truth[2], st.alarm_level_lpm[0], st.alarm_level_lpm[1], st.health, st.valve_gain_deviation[0], st.valve_gain_deviation[1], vel[0], vel[1], m.region(), sd[0], sd[1], sd[2], sd[3], st.evidence[0].log_likelihood, st.evidence[1].log_likelihood, st.evidence[2].log_likelihood, st.evidence[3].log_likelihood, st.evidence[0].mean_nis, st.evidence[1].mean_nis, st.evidence[2].mean_nis, st.evidence[3].mean_nis, s.p_supply_bar.unwrap_or(f32::NAN), s.p_tank_bar.unwrap_or(f32::NAN), s.x_piston_m.unwrap_or(f32::NAN)
                     )?;
                 }
             }
