@@ -5,7 +5,7 @@ use host_sim::eval::exec::{self, Alarm, TruthSummary};
 use host_sim::eval::report::{self, Target};
 use host_sim::eval::{
     self, plan, Category, Cell, ExecConfig, FaultKind, PlanConfig, RigSet, RunResult, RunSpec,
-    DEV_RIGS, HOLDOUT_RIGS, SURVEY2_RIGS, SURVEY_RIGS, WIDE_RIGS,
+    DEV_RIGS, HOLDOUT_RIGS, SURVEY2_RIGS, SURVEY3_RIGS, SURVEY_RIGS, WIDE_RIGS,
 };
 use monitor::Params;
 use std::time::Instant;
@@ -380,6 +380,17 @@ fn holdout_rigs_never_appear_in_a_dev_run() {
     for &s in &SURVEY2_RIGS {
         for set in [&DEV_RIGS[..], &HOLDOUT_RIGS, &WIDE_RIGS, &SURVEY_RIGS] {
             assert!(!set.contains(&s), "second survey rig {s} in another set");
+        }
+    }
+    for &s in &SURVEY3_RIGS {
+        for set in [
+            &DEV_RIGS[..],
+            &HOLDOUT_RIGS,
+            &WIDE_RIGS,
+            &SURVEY_RIGS,
+            &SURVEY2_RIGS,
+        ] {
+            assert!(!set.contains(&s), "third survey rig {s} in another set");
         }
     }
     // The further development rigs: their own set, one cell each with

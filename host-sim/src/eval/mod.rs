@@ -58,6 +58,12 @@ pub const SURVEY_RIGS: [u64; 48] = consecutive(31);
 /// Disjoint from the other sets.
 pub const SURVEY2_RIGS: [u64; 48] = consecutive(79);
 
+/// Third survey rigs (seeds 127–174): set aside on 2026-12-05 and first
+/// run, untuned, in the next session, before anything in it was looked
+/// at, to measure again on rigs nobody tuned on; from then on tuned on
+/// like the others (reported separately). Disjoint from the other sets.
+pub const SURVEY3_RIGS: [u64; 48] = consecutive(127);
+
 /// `N` consecutive seeds from `first`.
 const fn consecutive<const N: usize>(first: u64) -> [u64; N] {
     let mut seeds = [0; N];
@@ -83,6 +89,8 @@ pub enum RigSet {
     Survey,
     /// [`SURVEY2_RIGS`].
     Survey2,
+    /// [`SURVEY3_RIGS`].
+    Survey3,
 }
 
 impl RigSet {
@@ -94,6 +102,7 @@ impl RigSet {
             Self::Wide => &WIDE_RIGS,
             Self::Survey => &SURVEY_RIGS,
             Self::Survey2 => &SURVEY2_RIGS,
+            Self::Survey3 => &SURVEY3_RIGS,
         }
     }
 
@@ -105,6 +114,7 @@ impl RigSet {
             Self::Wide => "wide",
             Self::Survey => "survey",
             Self::Survey2 => "survey2",
+            Self::Survey3 => "survey3",
         }
     }
 }
@@ -126,6 +136,9 @@ pub enum SetChoice {
     /// A second survey sample (seeds 79–126), first run untuned on
     /// 2026-12-05 (use with `--quick`).
     Survey2,
+    /// A third survey sample (seeds 127–174), first run untuned in the
+    /// session after (use with `--quick`).
+    Survey3,
 }
 
 impl SetChoice {
@@ -138,6 +151,7 @@ impl SetChoice {
             Self::Wide => vec![RigSet::Wide],
             Self::Survey => vec![RigSet::Survey],
             Self::Survey2 => vec![RigSet::Survey2],
+            Self::Survey3 => vec![RigSet::Survey3],
         }
     }
 }

@@ -120,6 +120,7 @@ pub fn markdown(ev: &Evaluation) -> String {
         RigSet::Wide,
         RigSet::Survey,
         RigSet::Survey2,
+        RigSet::Survey3,
         RigSet::Holdout,
     ] {
         let cells: Vec<&CellResult> = ev.cells.iter().filter(|c| c.cell.set == set).collect();
@@ -143,6 +144,7 @@ fn set_report(out: &mut String, set: RigSet, cells: &[&CellResult], runs: &[&Run
         RigSet::Wide => "Further development rigs",
         RigSet::Survey => "Survey development rigs",
         RigSet::Survey2 => "Second survey development rigs",
+        RigSet::Survey3 => "Third survey development rigs",
     };
     let _ = writeln!(
         out,
