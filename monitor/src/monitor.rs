@@ -307,6 +307,9 @@ impl<T: Real> Monitor<T> {
                 laminar_factor: self.laminar_factor,
                 land: self.plant.land_leak(u_valve),
                 rod: self.plant.rod_edges(u_valve),
+                // At the `both` filter's estimate: it is never reset
+                // alone for long, and any filter's is as good.
+                tables: self.plant.tabulated(&bank.plant_state(Hypothesis::Both)),
             },
             step: Step {
                 dt: T::c(dt),

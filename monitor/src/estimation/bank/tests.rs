@@ -53,6 +53,7 @@ fn at_point<T: Real>((u, s0): (f64, [f64; NX])) -> Setting<T> {
             laminar_factor: T::ONE,
             land: plant.land_leak(T::c(u)),
             rod: plant.rod_edges(T::c(u)),
+            tables: plant.tabulated(&core::array::from_fn(|i| T::c(s0[i]))),
         },
         step: Step {
             dt: T::c(0.001),
@@ -288,11 +289,14 @@ fn dense_step<T: Real, const N: usize>(f: &mut HypothesisFilter<T, N>, s: &Setti
 /// 1 + |x|), P within `tol_p` of √(P_aa·P_bb).
 fn filter_matches_dense<T: Real, const N: usize>(h: Hypothesis, tol_x: f64, tol_p: f64) {
     for point in POINTS {
-        let s = at_point::<T>(point);
+        let mut s = at_point::<T>(point);
         let p0 = [T::c(1e-3); NB];
         let mut fast = HypothesisFilter::<T, N>::new(h, &s.s0, &p0, T::c(0.1));
         let mut slow = fast.clone();
         for _ in 0..500 {
+            // The tables where the plant is, as the monitor looks them up.
+            let at: [T; NX] = core::array::from_fn(|i| slow.ekf.x[i]);
+            s.ctx.inputs.tables = s.plant.tabulated(&at);
             step(&mut fast, &s).expect("a healthy filter step");
             dense_step(&mut slow, &s);
         }
@@ -353,6 +357,8 @@ fn healthy_laminar_leakage_never_estimated_below_its_floor() {
     f.ekf.x[LAMINAR] = -0.45;
     let mut lowest = f64::INFINITY;
     for _ in 0..2000 {
+        let at: [f64; NX] = core::array::from_fn(|i| f.ekf.x[i]);
+        s.ctx.inputs.tables = s.plant.tabulated(&at);
         let x = &f.ekf.x;
         let m = Measurement {
             z: [x[XP], x[P3] + 2e-3, x[P4] - 2e-3],

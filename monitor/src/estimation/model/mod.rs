@@ -35,7 +35,7 @@
 use crate::params::Params;
 use crate::physics::fluid::BulkModulusTable;
 pub use crate::physics::friction::stribeck_decay;
-use crate::physics::load::LoadTable;
+use crate::physics::load::{LoadTable, LoadTerms};
 pub use crate::physics::units::{BAR, LEAK_UNIT, LPM_PER_M3S};
 use crate::physics::valve::{land_growth, opening, orifice, spool_at, SpoolStep, OPENING_ROUNDING};
 use crate::real::Real;
@@ -85,6 +85,34 @@ pub struct Inputs<T> {
     /// The rod-side edges' metering at this command
     /// ([`Plant::rod_edges`]).
     pub rod: RodEdges<T>,
+    /// The load and the chambers' bulk moduli, looked up once a sample
+    /// ([`Plant::tabulated`]).
+    pub tables: Tabulated<T>,
+}
+
+/// The model's state-dependent tables, looked up once a sample at one
+/// state (the `both` filter's estimate before the step) for every filter
+/// and substep: the pantograph's load at the piston position and each
+/// chamber's bulk modulus at its pressure. Both tables interpolate
+/// linearly, so each evaluation moves along the looked-up interval's slope
+/// to its own state ([`Plant::eval`]): exact while the state stays in that
+/// interval, as it does within a 1 ms step and between filters (their
+/// states differ by a fraction of the pressure noise); the moving mass is
+/// taken as looked up (it changes by parts per million there). Looked up
+/// per filter and substep the tables cost 1 200 instructions a sample
+/// (sixteen interval searches and eight load interpolations).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Tabulated<T> {
+    /// Piston position (m) and chamber pressures (Pa) they were looked up at.
+    pub at: [T; 3],
+    /// Load terms at that position.
+    pub load: LoadTerms<T>,
+    /// 1 / M(x), 1/kg.
+    pub inv_mass: T,
+    /// Bulk modulus of each chamber at its pressure, Pa (piston, rod side).
+    pub beta: [T; 2],
+    /// Its slope dβ/dp there.
+    pub dbeta: [T; 2],
 }
 
 /// Flow of each direction's rod-side metering edge (B→T extending, P→B
@@ -316,6 +344,24 @@ impl<T: Real> Plant<T> {
         }
     }
 
+    /// The load and bulk-modulus tables at scaled plant state `s`
+    /// ([`Tabulated`]).
+    #[inline]
+    pub fn tabulated(&self, s: &[T; NX]) -> Tabulated<T> {
+        let p_ref = T::c(P_REF);
+        let at = [s[XP] * T::c(X_REF), s[P3] * p_ref, s[P4] * p_ref];
+        let load = self.load.at(at[0]);
+        let (beta3, dbeta3) = self.beta.at(at[1]);
+        let (beta4, dbeta4) = self.beta.at(at[2]);
+        Tabulated {
+            at,
+            inv_mass: T::ONE / load.mass_kg,
+            load,
+            beta: [beta3, beta4],
+            dbeta: [dbeta3, dbeta4],
+        }
+    }
+
     /// Friction force (N) and its slope dF/dv (N·s/m) at velocity `v` (m/s).
     /// The sign function is smoothed as v/√(v² + v_s²) and the Stribeck
     /// decay e^(−y) is replaced by 1/(1 + y + y²/2 + y³/6) (within 2 % for
@@ -353,14 +399,19 @@ impl<T: Real> Plant<T> {
         let p5 = u.p_tank_pa;
 
         // --- Mechanics: M·a = p3·A_p − p4·A_r − F_f(v) − G(x) − c2(x)·v².
-        let load = self.load.at(xp);
+        // The tables along their slopes from where they were looked up.
+        let tab = &u.tables;
+        let load = &tab.load;
+        let dx = xp - tab.at[0];
+        let gravity = load.gravity_n + load.dgravity * dx;
+        let c2 = load.c2_kg_m + load.dc2 * dx;
         let (f_fric, df_fric) = self.friction(v);
-        let f_net = p3 * self.a_p - p4 * self.a_r - f_fric - load.gravity_n - load.c2_kg_m * v * v;
-        let inv_m = T::ONE / load.mass_kg;
+        let f_net = p3 * self.a_p - p4 * self.a_r - f_fric - gravity - c2 * v * v;
+        let inv_m = tab.inv_mass;
         let acc = f_net * inv_m;
         let dacc_dx =
             (-load.dgravity - load.dc2 * v * v) * inv_m - f_net * load.dmass * inv_m * inv_m;
-        let dacc_dv = (-df_fric - T::c(2.0) * load.c2_kg_m * v) * inv_m;
+        let dacc_dv = (-df_fric - T::c(2.0) * c2 * v) * inv_m;
 
         // --- Valve: metering edges open past the dead zone.
         let (a_pos, da_pos) = opening(xv - self.dead_zone, self.open_eps);
@@ -436,8 +487,9 @@ impl<T: Real> Plant<T> {
         };
         let vol_a = self.v_p0 + self.a_p * xc;
         let vol_b = self.v_r0 + self.a_r * (self.stroke - xc);
-        let (beta3, dbeta3) = self.beta.at(p3);
-        let (beta4, dbeta4) = self.beta.at(p4);
+        let [dbeta3, dbeta4] = tab.dbeta;
+        let beta3 = tab.beta[0] + dbeta3 * (p3 - tab.at[1]);
+        let beta4 = tab.beta[1] + dbeta4 * (p4 - tab.at[2]);
         let ca = beta3 / vol_a;
         let cb = beta4 / vol_b;
         let flow_a = q_a - q_i - self.a_p * v;
