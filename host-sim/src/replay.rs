@@ -127,6 +127,10 @@ pub struct ReplaySummary {
     /// Frequency of that oscillation, Hz (`null` where the share is, or
     /// none oscillates).
     pub loop_oscillation_hz: Option<f64>,
+    /// Fraction of samples at which the monitor itself said the loop hunts
+    /// (`health::LOOP_OSCILLATING`: most of its last 2 s oscillated), as the
+    /// device reports it over CAN.
+    pub loop_hunting_fraction: f64,
 }
 
 /// Most events a replay keeps in its summary.
@@ -283,11 +287,12 @@ pub fn replay<T: Real, R: BufRead>(
         alarm_level_external_lpm: None,
         loop_oscillation_share: None,
         loop_oscillation_hz: None,
+        loop_hunting_fraction: 0.0,
     };
     let mut loop_meter = oscillation::Meter::default();
     let (mut inconclusive, mut nis_sum, mut nis_n) = (0u64, 0.0, 0u64);
     let t0 = first.as_ref().map(|s| s.t_s);
-    let mut mismatch = 0u64;
+    let (mut mismatch, mut hunting) = (0u64, 0u64);
     let head = first.into_iter().chain(second).map(Ok);
     for sample in head.chain(reader) {
         let sample = sample?;
@@ -306,6 +311,9 @@ pub fn replay<T: Real, R: BufRead>(
         }
         if status.verdict == Verdict::Inconclusive {
             inconclusive += 1;
+        }
+        if status.health & monitor::status::health::LOOP_OSCILLATING != 0 {
+            hunting += 1;
         }
         if status.health & monitor::status::health::OUTLIER != 0 {
             summary.outlier_samples += 1;
@@ -347,6 +355,7 @@ pub fn replay<T: Real, R: BufRead>(
     }
     summary.model_mismatch_fraction = mismatch as f64 / summary.samples.max(1) as f64;
     summary.inconclusive_fraction = round4(inconclusive as f64 / summary.samples.max(1) as f64);
+    summary.loop_hunting_fraction = round4(hunting as f64 / summary.samples.max(1) as f64);
     summary.mean_nis = (nis_n > 0).then(|| round4(nis_sum / nis_n as f64));
     if let Some(o) = loop_meter.finish() {
         summary.loop_oscillation_share = Some(round4(o.share));

@@ -242,15 +242,18 @@ fn replay_names_the_alarm_level_in_use() {
 #[test]
 fn a_loop_that_hunts_is_measured_and_named_by_replay() {
     // 10 s at 100 bar of a position loop hunting at 18 Hz: the chamber
-    // pressures swing ±30 bar with a ±0.04 command, the piston stays put.
+    // pressures swing ±30 bar with a ±0.04 command, the piston trembles
+    // by ±0.1 mm about its place.
     let mut body = String::from(HEADER);
     for k in 0..10_000 {
         let t = k as f64 * 1e-3;
-        let s = (2.0 * std::f64::consts::PI * 18.0 * t).sin();
+        let phase = 2.0 * std::f64::consts::PI * 18.0 * t;
+        let s = phase.sin();
         body += &format!(
-            "{t:.3},100.0,{:.2},{:.2},1.0,0.0900,{:.4}\n",
+            "{t:.3},100.0,{:.2},{:.2},1.0,{:.5},{:.4}\n",
             50.0 + 30.0 * s,
             40.0 - 30.0 * s,
+            0.09 - 1e-4 * phase.cos(),
             0.04 * s
         );
     }
@@ -261,6 +264,11 @@ fn a_loop_that_hunts_is_measured_and_named_by_replay() {
     let share = v["loop_oscillation_share"].as_f64().unwrap();
     let hz = v["loop_oscillation_hz"].as_f64().unwrap();
     assert!(share > 0.95 && (hz - 18.0).abs() < 1.0, "{v}");
+    // The monitor says so itself, as the device would over CAN, from
+    // 1.4 s in (the recent share of its 0.2 s windows reaching a half
+    // after seven of them).
+    let hunting = v["loop_hunting_fraction"].as_f64().unwrap();
+    assert!((0.8..0.9).contains(&hunting), "{v}");
     let out = host_sim_ok(&["replay", rec.to_str().unwrap()]);
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(
@@ -278,6 +286,7 @@ fn a_loop_that_hunts_is_measured_and_named_by_replay() {
     ]);
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert!(v["loop_oscillation_share"].as_f64().unwrap() < 0.05, "{v}");
+    assert_eq!(v["loop_hunting_fraction"].as_f64(), Some(0.0), "{v}");
     // One sample: nothing to judge.
     let one = write(dir.path(), "one.csv", &format!("{HEADER}{ROW0}"));
     let out = host_sim_ok(&["replay", "--json", one.to_str().unwrap()]);

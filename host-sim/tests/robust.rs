@@ -801,6 +801,21 @@ fn a_loop_that_hunts_is_named_as_the_cause_of_the_refusal() {
             && why.contains("stabilise the loop, then record again; as it is, "),
         "{why}"
     );
+    // The monitor says so itself on the same minute (health flag, CAN
+    // `Health` bit 13) for most of it, and never with a leak alarm.
+    let mut m = Monitor::<f32>::new(&Params::nominal()).unwrap();
+    let flagged = samples
+        .iter()
+        .map(|s| m.step(s))
+        .inspect(|st| assert!(!st.verdict.is_leak(), "{:?}", st.verdict))
+        .filter(|st| st.health & health::LOOP_OSCILLATING != 0)
+        .count();
+    let share = flagged as f64 / samples.len() as f64;
+    assert!(
+        share > 0.7,
+        "flagged on {:.0} % of the minute",
+        100.0 * share
+    );
     // A loop that hunts for a third of its minute is calibrated, and
     // warned about: development rig 5 at 100 bar, 40 °C.
     let cal = calibrated(5, 100.0, 40.0);
@@ -809,9 +824,16 @@ fn a_loop_that_hunts_is_named_as_the_cause_of_the_refusal() {
     assert_warns(&cal, |w| {
         w.starts_with("the position loop oscillates at ≈ ")
     });
-    // A settled loop: development rig 1 at 50 bar, 25 °C.
+    // A settled loop: development rig 1 at 50 bar, 25 °C; the monitor
+    // never flags it.
     let cal = calibrated(1, 50.0, 25.0);
     assert!(cal.oscillation.as_ref().expect("measured").share < 0.05);
+    let mut m = Monitor::<f32>::new(&cal.params).unwrap();
+    let settled = plant::simulate(&calibration_run(1, 50.0, 25.0));
+    assert!(settled
+        .iter()
+        .map(row_sample)
+        .all(|s| m.step(&s).health & health::LOOP_OSCILLATING == 0));
     assert!(
         !cal.warnings.iter().any(|w| w.contains("oscillates")),
         "{:?}",

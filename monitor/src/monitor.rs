@@ -18,6 +18,7 @@ use crate::physics::fluid::laminar_flow_factor;
 use crate::physics::valve::SpoolStep;
 use crate::real::Real;
 use crate::sample::Sample;
+use crate::signal::oscillation::LoopWatch;
 use crate::signal::{Conditioned, SampleChecker};
 use crate::status::{health, Event, Events, Status, Verdict};
 
@@ -82,6 +83,8 @@ pub struct Monitor<T: Real = f32> {
     region: usize,
     /// The piston speed from the position reading alone.
     speed: PistonSpeed<T>,
+    /// Whether the machine's position loop hunts.
+    loop_watch: LoopWatch<T>,
     /// Inputs of the previous sample: they drove the plant until this one.
     held: Option<HeldInputs>,
     /// How quasi-steady the plant is: the learning weight of the parameter
@@ -164,6 +167,7 @@ impl<T: Real> Monitor<T> {
             held: None,
             region: HOLDING_REGION,
             speed: PistonSpeed::default(),
+            loop_watch: LoopWatch::default(),
             quiet: Quietness::new(
                 f.quiet_rate_bar_s,
                 f.quiet_flow_lpm,
@@ -228,6 +232,7 @@ impl<T: Real> Monitor<T> {
             self.bank = None;
             self.held = None;
             self.checker.break_pressure_sequence();
+            self.loop_watch.break_window();
             flags |= health::DATA_GAP;
             let _ = events.push(Event::DataGap);
         }
@@ -238,6 +243,7 @@ impl<T: Real> Monitor<T> {
             self.bank = None;
             self.held = None;
             self.checker.break_pressure_sequence();
+            self.loop_watch.break_window();
             return self.status(
                 sample.t_s,
                 checked.faulted,
@@ -246,6 +252,9 @@ impl<T: Real> Monitor<T> {
             );
         };
         self.update_temperature(c.temp_oil_c);
+        if self.loop_watch.update(T::from_f32(held_s), &c) {
+            flags |= health::LOOP_OSCILLATING;
+        }
         self.checker.observe_pressures(c.p_piston_bar, c.p_rod_bar);
         let suspect = checked.suspect != 0;
 

@@ -361,5 +361,7 @@ pub mod ne43;
 pub mod frozen;
 // Each reading's noise level, for the filters' measurement noise.
 pub mod noise;
+// Whether the machine's position loop hunts.
+pub mod oscillation;
 // Position spikes and a valve command the motion contradicts.
 pub mod plausible;

@@ -123,10 +123,15 @@ pub mod health {
     /// installation: never `healthy`, and only gross leaks alarm
     /// (`baseline.provisional_floor_lpm`).
     pub const PROVISIONAL: u16 = 1 << 12;
+    /// The machine's position loop hunts: most of the last 2 s the valve
+    /// command and the chamber pressures oscillated together
+    /// (`signal::oscillation`). Such samples are no leak evidence, so the
+    /// verdict stays `inconclusive` while it lasts; stabilise the loop.
+    pub const LOOP_OSCILLATING: u16 = 1 << 13;
 
     /// Every flag above with its name (as the CAN decoder and logs show
     /// it), in bit order. A new flag goes here too.
-    pub const NAMES: [(u16, &str); 13] = [
+    pub const NAMES: [(u16, &str); 14] = [
         (WARMING_UP, "WARMING_UP"),
         (EVIDENCE_PAUSED, "EVIDENCE_PAUSED"),
         (DATA_GAP, "DATA_GAP"),
@@ -140,6 +145,7 @@ pub mod health {
         (OUTLIER, "OUTLIER"),
         (ACK_EVIDENCE, "ACK_EVIDENCE"),
         (PROVISIONAL, "PROVISIONAL"),
+        (LOOP_OSCILLATING, "LOOP_OSCILLATING"),
     ];
 }
 

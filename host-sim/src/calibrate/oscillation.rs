@@ -1,53 +1,30 @@
-//! Does the machine's position loop oscillate?
+//! Does the machine's position loop oscillate, and how much of a
+//! recording?
 //!
-//! A position loop tuned at one supply pressure can hunt at a higher one
-//! (the valve's flow gain grows with √Δp): the valve command swings a few
-//! per cent of its travel at 10–30 Hz and the chamber pressures with it by
-//! tens of bar. No sample of such a stretch counts as leak evidence (the
-//! monitor's evidence weight falls with the chamber pressures' rate), and
-//! calibration finds few quasi-steady moves in it — a refusal that names
-//! the missing moves sends the engineer to record more of the same. The
-//! oscillation is measured here so that the report names it.
-//!
-//! The recording is cut into [`WINDOW_S`] windows; in each, the chamber
-//! pressures and the valve command are taken about their least-squares
-//! line (a steady move or a pressure ramp leaves nothing). A window
-//! oscillates when a chamber pressure swings (rms) at least
-//! [`CHAMBER_SWING_SHARE`] of the window's supply pressure while the
-//! command swings at least [`COMMAND_SWING`]: pump ripple moves the
-//! pressures without the command, a noisy command reading moves no
-//! pressure.
+//! A position loop tuned at one supply pressure can hunt at a higher one;
+//! no sample of such a stretch counts as leak evidence, and calibration
+//! finds few quasi-steady moves in it — a refusal that names the missing
+//! moves sends the engineer to record more of the same. The oscillation is
+//! measured here so that the report names it, with its frequency and
+//! swing. Each window is judged as the device judges it
+//! (`monitor::signal::oscillation`, which also raises
+//! `health::LOOP_OSCILLATING`): this meter adds the share of a whole
+//! recording, the frequency and the means the report gives.
 
+use monitor::signal::oscillation::{
+    window_oscillates, HUNTING_SHARE, MIN_WINDOW_SAMPLES, WINDOW_S,
+};
 use monitor::Sample;
 
-/// Length of the windows, s: several periods of a 10–30 Hz oscillation.
-pub const WINDOW_S: f64 = 0.2;
-/// Chamber-pressure swing (rms about the window's trend), relative to the
-/// supply pressure, from which a window oscillates. On the tuning rigs'
-/// 60 s calibration recordings, loops that hunt swing the chambers by
-/// 26–46 bar at 100 bar; at 50 bar a settled loop's valve steps move them
-/// by 4–6 bar.
-pub const CHAMBER_SWING_SHARE: f64 = 0.10;
-/// Valve-command swing (rms about the window's trend) from which a window
-/// oscillates: 0.5 % of the travel; the hunting loops above, 2–6 %.
-pub const COMMAND_SWING: f64 = 0.005;
 /// Share of the recording from which the report warns: the monitor then
 /// has no evidence for that share of the machine's work.
 pub const WARN_SHARE: f64 = 0.15;
-/// Share from which a refused calibration names the oscillation as its
-/// cause: 8 tuning cells whose loops hunt 71–95 % of the time were
-/// refused for want of quasi-steady moves or of evidence; the calibrated
-/// cells that hunt do so for at most 59 %.
-pub const CAUSE_SHARE: f64 = 0.5;
 /// Does an oscillating share of a recording warrant a warning
 /// ([`WARN_SHARE`])? Calibration's report and `replay`'s summary (which
 /// keeps only the share) ask the same question.
 pub fn share_worth_a_warning(share: f64) -> bool {
     share >= WARN_SHARE
 }
-
-/// Fewest readings a window needs to be judged.
-const MIN_WINDOW_SAMPLES: usize = 20;
 
 /// How much of a recording the position loop oscillates, and how.
 #[derive(Clone, Debug, PartialEq)]
@@ -88,9 +65,13 @@ impl Oscillation {
         share_worth_a_warning(self.share)
     }
 
-    /// A refusal names it as the cause ([`CAUSE_SHARE`]).
+    /// A refusal names it as the cause: it oscillates for at least the
+    /// share from which the device says the loop hunts ([`HUNTING_SHARE`]:
+    /// 8 tuning cells whose loops hunt 71–95 % of the time were refused for
+    /// want of quasi-steady moves or of evidence; the calibrated cells
+    /// that hunt do so for at most 59 %).
     pub fn is_the_cause(&self) -> bool {
-        self.share >= CAUSE_SHARE
+        self.share >= HUNTING_SHARE
     }
 
     /// A refusal's reason `why`, with the oscillation named first where it
@@ -262,10 +243,7 @@ impl Meter {
             // The command's line once: its residuals give the swing and the cycles.
             let command_line = Line::fit(&w.t, &w.command);
             let command_swing = rms(command_line.residuals(&w.t, &w.command));
-            if supply > 0.0
-                && swing >= CHAMBER_SWING_SHARE * supply
-                && command_swing >= COMMAND_SWING
-            {
+            if window_oscillates(supply, swing, command_swing) {
                 // Half a σ of hysteresis: noise on the command adds no cycles.
                 let residuals = command_line.residuals(&w.t, &w.command);
                 let (n, span) = cycles(&w.t, residuals, 0.5 * command_swing);

@@ -100,7 +100,7 @@ impl Calibration {
                 s,
                 "\nLoop oscillation ({} windows of {} s judged): {what}.",
                 o.windows,
-                super::oscillation::WINDOW_S
+                monitor::signal::oscillation::WINDOW_S
             );
         }
         if let Some(v) = &self.validation {
