@@ -85,7 +85,11 @@ fn health_and_faulted_channels_by_name() {
         describe(&s("Health", 3 << 11)),
         "Health=ACK_EVIDENCE|PROVISIONAL"
     );
-    assert_eq!(describe(&s("Health", 1 << 13)), "Health=BIT13");
+    assert_eq!(
+        describe(&s("Health", 1 << 13)),
+        "Health=LOOP_OSCILLATING"
+    );
+    assert_eq!(describe(&s("Health", 1 << 14)), "Health=BIT14");
     assert_eq!(
         describe(&s("FaultedChannels", 0b110)),
         "FaultedChannels=p_piston|p_rod"
