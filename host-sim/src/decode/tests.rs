@@ -85,10 +85,7 @@ fn health_and_faulted_channels_by_name() {
         describe(&s("Health", 3 << 11)),
         "Health=ACK_EVIDENCE|PROVISIONAL"
     );
-    assert_eq!(
-        describe(&s("Health", 1 << 13)),
-        "Health=LOOP_OSCILLATING"
-    );
+    assert_eq!(describe(&s("Health", 1 << 13)), "Health=LOOP_OSCILLATING");
     assert_eq!(describe(&s("Health", 1 << 14)), "Health=BIT14");
     assert_eq!(
         describe(&s("FaultedChannels", 0b110)),
