@@ -165,7 +165,7 @@ impl<T: Real> LoopWatch<T> {
             let swing = |s: &Sums<T>| s.variance_about_line(n, self.t, stt).sqrt();
             let chamber = swing(&self.piston).max(swing(&self.rod));
             let oscillates = window_oscillates(self.supply / n, chamber, swing(&self.command));
-            let a = T::ONE / T::c(RECENT_WINDOWS);
+            let a = T::c(1.0 / RECENT_WINDOWS);
             let x = if oscillates { T::ONE } else { T::ZERO };
             self.share += a * (x - self.share);
             self.hunting = if self.hunting {
