@@ -11,9 +11,7 @@
 //! `health::LOOP_OSCILLATING`): this meter adds the share of a whole
 //! recording, the frequency and the means the report gives.
 
-use monitor::signal::oscillation::{
-    window_oscillates, HUNTING_SHARE, MIN_WINDOW_SAMPLES, WINDOW_S,
-};
+use monitor::signal::oscillation::{self, HUNTING_SHARE, WINDOW_S};
 use monitor::Sample;
 
 /// Share of the recording from which the report warns: the monitor then
@@ -89,50 +87,6 @@ impl Oscillation {
     }
 }
 
-/// The least-squares line of `y` in `t`: its centre (t̄, ȳ) and slope.
-struct Line {
-    t_mean: f64,
-    y_mean: f64,
-    slope: f64,
-}
-
-impl Line {
-    fn fit(t: &[f64], y: &[f64]) -> Self {
-        let n = t.len() as f64;
-        let (t_mean, y_mean) = (t.iter().sum::<f64>() / n, y.iter().sum::<f64>() / n);
-        let stt: f64 = t.iter().map(|a| (a - t_mean) * (a - t_mean)).sum();
-        let sty: f64 = t
-            .iter()
-            .zip(y)
-            .map(|(a, b)| (a - t_mean) * (b - y_mean))
-            .sum();
-        let slope = if stt > 0.0 { sty / stt } else { 0.0 };
-        Self {
-            t_mean,
-            y_mean,
-            slope,
-        }
-    }
-
-    /// `y` less the line, sample by sample.
-    fn residuals<'a>(&'a self, t: &'a [f64], y: &'a [f64]) -> impl Iterator<Item = f64> + 'a {
-        t.iter()
-            .zip(y)
-            .map(move |(a, b)| b - self.y_mean - self.slope * (a - self.t_mean))
-    }
-}
-
-/// Swing of `y` about its least-squares line in `t` (rms).
-fn swing_about_line(t: &[f64], y: &[f64]) -> f64 {
-    rms(Line::fit(t, y).residuals(t, y))
-}
-
-/// Root mean square of `r` (0 if empty).
-fn rms(r: impl Iterator<Item = f64>) -> f64 {
-    let (sum, n) = r.fold((0.0, 0usize), |(s, n), x| (s + x * x, n + 1));
-    (sum / n.max(1) as f64).sqrt()
-}
-
 /// Whole cycles of `r` (at times `t`) and the time they took, s: between
 /// the first and the last upward crossing through ±`band` (a crossing
 /// counts once the signal went below −band and then above +band, at the
@@ -157,30 +111,22 @@ fn cycles(t: &[f64], r: impl Iterator<Item = f64>, band: f64) -> (usize, f64) {
     (ups.saturating_sub(1), last - first)
 }
 
-/// One window's readings: time, piston and rod pressure, command, and the
-/// supply pressure's sum.
+/// One window: its running sums (the monitor's, which judge it), and the
+/// times and commands, kept for the command's cycles.
 #[derive(Default)]
 struct Window {
+    sums: oscillation::Window<f64>,
     t: Vec<f64>,
-    p_piston: Vec<f64>,
-    p_rod: Vec<f64>,
     command: Vec<f64>,
-    supply_sum: f64,
     /// A reading was missing or not finite: the window is not judged.
     gap: bool,
 }
 
 impl Window {
     fn clear(&mut self) {
-        for v in [
-            &mut self.t,
-            &mut self.p_piston,
-            &mut self.p_rod,
-            &mut self.command,
-        ] {
-            v.clear();
-        }
-        self.supply_sum = 0.0;
+        self.sums = oscillation::Window::default();
+        self.t.clear();
+        self.command.clear();
         self.gap = false;
     }
 
@@ -193,10 +139,9 @@ impl Window {
             finite(s.u_valve),
         ) {
             (Some(ps), Some(a), Some(b), Some(u)) => {
+                let t0 = self.t.first().copied().unwrap_or(s.t_s);
+                self.sums.add(s.t_s - t0, ps, a, b, u);
                 self.t.push(s.t_s);
-                self.supply_sum += ps;
-                self.p_piston.push(a);
-                self.p_rod.push(b);
                 self.command.push(u);
             }
             _ => self.gap = true,
@@ -236,21 +181,22 @@ impl Meter {
     /// Judge the window and start the next.
     fn judge(&mut self) {
         let w = &self.window;
-        if !w.gap && w.t.len() >= MIN_WINDOW_SAMPLES {
+        if let Some(j) = w.sums.judge().filter(|_| !w.gap) {
             self.judged += 1;
-            let supply = w.supply_sum / w.t.len() as f64;
-            let swing = swing_about_line(&w.t, &w.p_piston).max(swing_about_line(&w.t, &w.p_rod));
-            // The command's line once: its residuals give the swing and the cycles.
-            let command_line = Line::fit(&w.t, &w.command);
-            let command_swing = rms(command_line.residuals(&w.t, &w.command));
-            if window_oscillates(supply, swing, command_swing) {
-                // Half a σ of hysteresis: noise on the command adds no cycles.
-                let residuals = command_line.residuals(&w.t, &w.command);
-                let (n, span) = cycles(&w.t, residuals, 0.5 * command_swing);
+            if j.oscillates {
+                // The command less its line; half a σ of hysteresis: noise
+                // on the command adds no cycles.
+                let t0 = w.t[0];
+                let residuals =
+                    w.t.iter()
+                        .zip(&w.command)
+                        .map(|(&t, &u)| u - j.command_line.at(t - t0));
+                let (n, span) = cycles(&w.t, residuals, 0.5 * j.command_swing);
                 self.oscillating += 1;
                 self.cycles += n;
                 self.cycles_s += span;
-                for (sum, v) in self.sums.iter_mut().zip([swing, command_swing, supply]) {
+                let judged = [j.chamber_swing_bar, j.command_swing, j.supply_bar];
+                for (sum, v) in self.sums.iter_mut().zip(judged) {
                     *sum += v;
                 }
             }

@@ -67,28 +67,49 @@ impl<T: Real> Sums<T> {
         self.ty += tau * y;
         self.yy += y * y;
     }
+}
 
-    /// Variance of `y` about its least-squares line over the window, from
-    /// the time sums `n`, Στ and the centred Σ(τ − τ̄)² `stt`.
-    fn variance_about_line(&self, n: T, t: T, stt: T) -> T {
-        let syy = self.yy - self.y * self.y / n;
-        let sty = self.ty - t * self.y / n;
-        let explained = if stt > T::ZERO {
-            sty * sty / stt
-        } else {
-            T::ZERO
-        };
-        ((syy - explained) / n).max(T::ZERO)
+/// The least-squares line of a signal over a window: its value at the
+/// window's mean time and its slope.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Line<T> {
+    /// Mean time τ̄ of the window, s (from its start).
+    pub tau_mean: T,
+    /// The signal's mean (the line's value at τ̄).
+    pub mean: T,
+    /// Slope, per s.
+    pub slope: T,
+}
+
+impl<T: Real> Line<T> {
+    /// The line's value at time `tau` into the window.
+    pub fn at(&self, tau: T) -> T {
+        self.mean + self.slope * (tau - self.tau_mean)
     }
 }
 
-/// Watches the loop sample by sample in constant memory: the running sums
-/// of one window, and the recent share of oscillating windows.
-#[derive(Clone, Debug)]
-pub struct LoopWatch<T> {
-    /// Time into the window, s.
-    tau: T,
-    /// Samples, Στ, Στ² of the window.
+/// One window judged ([`Window::judge`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Judged<T> {
+    /// Mean supply pressure, bar.
+    pub supply_bar: T,
+    /// The larger chamber-pressure swing about its line (rms), bar.
+    pub chamber_swing_bar: T,
+    /// The command's swing about its line (rms).
+    pub command_swing: T,
+    /// The command's line (its residuals give the oscillation's cycles).
+    pub command_line: Line<T>,
+    /// [`window_oscillates`] for the above.
+    pub oscillates: bool,
+}
+
+/// One window's running sums over its time τ (s from the window's start):
+/// constant memory, one pass. The device's [`LoopWatch`] and calibration's
+/// meter (`host-sim`, which also counts the command's cycles) judge their
+/// windows with it.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Window<T> {
+    /// Samples, Στ, Στ².
     n: T,
     t: T,
     tt: T,
@@ -96,26 +117,75 @@ pub struct LoopWatch<T> {
     piston: Sums<T>,
     rod: Sums<T>,
     command: Sums<T>,
+}
+
+impl<T: Real> Window<T> {
+    /// Take the readings at `tau` s into the window: supply, piston and
+    /// rod chamber pressures (bar) and the valve command.
+    #[inline(always)]
+    pub fn add(&mut self, tau: T, supply_bar: T, piston_bar: T, rod_bar: T, command: T) {
+        self.n += T::ONE;
+        self.t += tau;
+        self.tt += tau * tau;
+        self.supply += supply_bar;
+        self.piston.add(tau, piston_bar);
+        self.rod.add(tau, rod_bar);
+        self.command.add(tau, command);
+    }
+
+    /// Judge the window; `None` with fewer than [`MIN_WINDOW_SAMPLES`].
+    pub fn judge(&self) -> Option<Judged<T>> {
+        let n = self.n;
+        if n < T::c(MIN_WINDOW_SAMPLES as f64) {
+            return None;
+        }
+        let tau_mean = self.t / n;
+        let stt = self.tt - self.t * tau_mean;
+        // Slope and variance about the line, from the centred sums.
+        let fit = |s: &Sums<T>| {
+            let mean = s.y / n;
+            let syy = s.yy - s.y * mean;
+            let sty = s.ty - self.t * mean;
+            let (slope, explained) = if stt > T::ZERO {
+                (sty / stt, sty * sty / stt)
+            } else {
+                (T::ZERO, T::ZERO)
+            };
+            let swing = ((syy - explained) / n).max(T::ZERO).sqrt();
+            (
+                Line {
+                    tau_mean,
+                    mean,
+                    slope,
+                },
+                swing,
+            )
+        };
+        let (_, piston) = fit(&self.piston);
+        let (_, rod) = fit(&self.rod);
+        let (command_line, command_swing) = fit(&self.command);
+        let supply_bar = self.supply / n;
+        let chamber_swing_bar = piston.max(rod);
+        Some(Judged {
+            supply_bar,
+            chamber_swing_bar,
+            command_swing,
+            command_line,
+            oscillates: window_oscillates(supply_bar, chamber_swing_bar, command_swing),
+        })
+    }
+}
+
+/// Watches the loop sample by sample in constant memory: one window's
+/// running sums, and the recent share of oscillating windows.
+#[derive(Clone, Debug, Default)]
+pub struct LoopWatch<T> {
+    /// Time into the window, s.
+    tau: T,
+    window: Window<T>,
     /// Exponential share of the recent windows that oscillated.
     share: T,
     hunting: bool,
-}
-
-impl<T: Real> Default for LoopWatch<T> {
-    fn default() -> Self {
-        Self {
-            tau: T::ZERO,
-            n: T::ZERO,
-            t: T::ZERO,
-            tt: T::ZERO,
-            supply: T::ZERO,
-            piston: Sums::default(),
-            rod: Sums::default(),
-            command: Sums::default(),
-            share: T::ZERO,
-            hunting: false,
-        }
-    }
 }
 
 /// Fewest readings a window needs to be judged.
@@ -131,25 +201,21 @@ impl<T: Real> LoopWatch<T> {
         if self.tau >= T::c(WINDOW_S) {
             self.judge();
         }
-        let tau = self.tau;
-        self.n += T::ONE;
-        self.t += tau;
-        self.tt += tau * tau;
-        self.supply += T::from_f32(c.p_supply_bar);
-        self.piston.add(tau, T::from_f32(c.p_piston_bar));
-        self.rod.add(tau, T::from_f32(c.p_rod_bar));
-        self.command.add(tau, T::from_f32(c.u_valve));
+        self.window.add(
+            self.tau,
+            T::from_f32(c.p_supply_bar),
+            T::from_f32(c.p_piston_bar),
+            T::from_f32(c.p_rod_bar),
+            T::from_f32(c.u_valve),
+        );
         self.hunting
     }
 
     /// A reading was missing (a fault, a gap): the window is not judged;
     /// the recent share is kept.
     pub fn break_window(&mut self) {
-        *self = Self {
-            share: self.share,
-            hunting: self.hunting,
-            ..Self::default()
-        };
+        self.tau = T::ZERO;
+        self.window = Window::default();
     }
 
     /// Whether the loop hunts (as the last [`update`](Self::update) said).
@@ -159,14 +225,9 @@ impl<T: Real> LoopWatch<T> {
 
     /// Judge the window that just ended and start the next one.
     fn judge(&mut self) {
-        let n = self.n;
-        if n >= T::c(MIN_WINDOW_SAMPLES as f64) {
-            let stt = self.tt - self.t * self.t / n;
-            let swing = |s: &Sums<T>| s.variance_about_line(n, self.t, stt).sqrt();
-            let chamber = swing(&self.piston).max(swing(&self.rod));
-            let oscillates = window_oscillates(self.supply / n, chamber, swing(&self.command));
+        if let Some(j) = self.window.judge() {
             let a = T::c(1.0 / RECENT_WINDOWS);
-            let x = if oscillates { T::ONE } else { T::ZERO };
+            let x = if j.oscillates { T::ONE } else { T::ZERO };
             self.share += a * (x - self.share);
             self.hunting = if self.hunting {
                 self.share >= T::c(SETTLED_SHARE)
