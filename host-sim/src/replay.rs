@@ -353,9 +353,11 @@ pub fn replay<T: Real, R: BufRead>(
             }
         }
     }
-    summary.model_mismatch_fraction = mismatch as f64 / summary.samples.max(1) as f64;
-    summary.inconclusive_fraction = round4(inconclusive as f64 / summary.samples.max(1) as f64);
-    summary.loop_hunting_fraction = round4(hunting as f64 / summary.samples.max(1) as f64);
+    let samples = summary.samples.max(1) as f64;
+    let fraction = |count: u64| count as f64 / samples;
+    summary.model_mismatch_fraction = fraction(mismatch);
+    summary.inconclusive_fraction = round4(fraction(inconclusive));
+    summary.loop_hunting_fraction = round4(fraction(hunting));
     summary.mean_nis = (nis_n > 0).then(|| round4(nis_sum / nis_n as f64));
     if let Some(o) = loop_meter.finish() {
         summary.loop_oscillation_share = Some(round4(o.share));
