@@ -373,6 +373,7 @@ fn holdout_rigs_never_appear_in_a_dev_run() {
         RigSet::Survey,
         RigSet::Survey2,
         RigSet::Survey3,
+        RigSet::Survey4,
     ];
     for (i, a) in sets.iter().enumerate() {
         for b in &sets[i + 1..] {

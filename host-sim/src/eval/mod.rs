@@ -64,6 +64,12 @@ pub const SURVEY2_RIGS: [u64; 48] = consecutive(79);
 /// like the others (reported separately). Disjoint from the other sets.
 pub const SURVEY3_RIGS: [u64; 48] = consecutive(127);
 
+/// Fourth survey rigs (seeds 175–222): set aside at the end of the eighth
+/// session of 2026-12-05 and first run, untuned, at the start of the
+/// next, before anything in it was looked at; from then on tuned on like
+/// the others (reported separately). Disjoint from the other sets.
+pub const SURVEY4_RIGS: [u64; 48] = consecutive(175);
+
 /// `N` consecutive seeds from `first`.
 const fn consecutive<const N: usize>(first: u64) -> [u64; N] {
     let mut seeds = [0; N];
@@ -91,6 +97,8 @@ pub enum RigSet {
     Survey2,
     /// [`SURVEY3_RIGS`].
     Survey3,
+    /// [`SURVEY4_RIGS`].
+    Survey4,
 }
 
 impl RigSet {
@@ -103,6 +111,7 @@ impl RigSet {
             Self::Survey => &SURVEY_RIGS,
             Self::Survey2 => &SURVEY2_RIGS,
             Self::Survey3 => &SURVEY3_RIGS,
+            Self::Survey4 => &SURVEY4_RIGS,
         }
     }
 
@@ -115,6 +124,7 @@ impl RigSet {
             Self::Survey => "survey",
             Self::Survey2 => "survey2",
             Self::Survey3 => "survey3",
+            Self::Survey4 => "survey4",
         }
     }
 }
@@ -139,6 +149,9 @@ pub enum SetChoice {
     /// A third survey sample (seeds 127–174), first run untuned in the
     /// session after (use with `--quick`).
     Survey3,
+    /// A fourth survey sample (seeds 175–222), first run untuned at the
+    /// start of the ninth session of 2026-12-05 (use with `--quick`).
+    Survey4,
 }
 
 impl SetChoice {
@@ -152,6 +165,7 @@ impl SetChoice {
             Self::Survey => vec![RigSet::Survey],
             Self::Survey2 => vec![RigSet::Survey2],
             Self::Survey3 => vec![RigSet::Survey3],
+            Self::Survey4 => vec![RigSet::Survey4],
         }
     }
 }
