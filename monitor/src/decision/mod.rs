@@ -434,7 +434,8 @@ impl<T: Real> Decision<T> {
     /// Take one sample's filter outputs (`None`: that filter was reset)
     /// with what else is known of that sample (`facts`).
     /// Returns `health::EVIDENCE_PAUSED` when it did not count (or counted
-    /// for little), else 0; the decision's own flags are
+    /// for little), with `health::VALVE_MISFIT` when the valve gains were
+    /// what ruled it out, else 0; the decision's own flags are
     /// [`flags`](Self::flags).
     pub fn update(
         &mut self,
@@ -461,19 +462,24 @@ impl<T: Real> Decision<T> {
         // small coefficient error times a large pressure difference would
         // otherwise look like a flow spike.
         let dt_w = dt * weight;
-        let mut valid = valid;
+        let mut misfit = false;
         if let Some(both) = &out[Hypothesis::Both as usize] {
             // A valve the `both` filter must bend this far is not
             // described by the model: what it reads then is no evidence
             // either way (a learned gain that bends is another matter).
-            valid &= !self.valve_misfit(both.valve_gain, valve_gains_learned);
+            misfit = self.valve_misfit(both.valve_gain, valve_gains_learned);
             if observable {
                 self.follow_flows(both, dt, dt_w, region);
             }
         }
+        let valid = valid && !misfit;
         self.count_evidence(dt, if valid { weight } else { T::ZERO });
         if !valid {
-            return health::EVIDENCE_PAUSED;
+            return if misfit {
+                health::EVIDENCE_PAUSED | health::VALVE_MISFIT
+            } else {
+                health::EVIDENCE_PAUSED
+            };
         }
         let a_evidence = (dt_w / self.slow_s).min(T::ONE);
         self.update_probabilities(out, dt_w, weight, a_evidence);
@@ -782,13 +788,6 @@ impl<T: Real> Decision<T> {
         }
         e
     }
-}
-
-/// Are valve flow-gain deviations (extend, retract; relative) further from
-/// the installation's than [`VALVE_GAIN_MISFIT`] (their root sum of
-/// squares)?
-pub fn valve_gains_misfit<T: Real>([extend, retract]: [T; 2]) -> bool {
-    extend * extend + retract * retract > T::c(VALVE_GAIN_MISFIT * VALVE_GAIN_MISFIT)
 }
 
 /// One step of an exponential average: `x` moves the fraction `a` of the
@@ -1270,6 +1269,41 @@ mod tests {
         let mut d: Decision<f64> = Decision::new(&p);
         feed_valve_gains(&mut d, 0.0, 10.0, bent, 0.008, 1.0);
         assert_eq!((!d.latched().is_empty(), d.conclusive()), (false, false));
+    }
+
+    #[test]
+    fn the_valve_misfit_flag_says_what_the_decision_judged_not_what_the_gains_read() {
+        // The flag a CAN reader and calibration's misfit share see: set
+        // where the bent gains made the sample no evidence, not where a
+        // learned gain bent (a change, still evidence).
+        let p = Params::nominal();
+        let bent = [-1.1 * VALVE_GAIN_MISFIT, 0.01];
+        let flags_after = |learned_first: bool| {
+            let mut d: Decision<f64> = Decision::new(&p);
+            if learned_first {
+                feed_valve_gains(&mut d, 0.0, 5.0, [-0.004, 0.01], 0.008, 0.0);
+            }
+            let mut out = outputs(0.0);
+            for o in out.iter_mut().flatten() {
+                o.valve_gain = bent;
+            }
+            let f = SampleFacts {
+                valve_gains_learned: [true; 2],
+                ..facts(0.001, 1.0, true, 2, 5.0)
+            };
+            d.update(&out, f, &mut Events::new())
+        };
+        let never_learned = flags_after(false);
+        assert_ne!(never_learned & health::VALVE_MISFIT, 0);
+        assert_ne!(never_learned & health::EVIDENCE_PAUSED, 0);
+        assert_eq!(flags_after(true) & health::VALVE_MISFIT, 0);
+        // Within the limit: no flag.
+        let mut d: Decision<f64> = Decision::new(&p);
+        let f = facts(0.001, 1.0, true, 2, 0.0);
+        assert_eq!(
+            d.update(&outputs(0.0), f, &mut Events::new()) & health::VALVE_MISFIT,
+            0
+        );
     }
 
     #[test]
