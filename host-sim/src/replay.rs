@@ -131,6 +131,10 @@ pub struct ReplaySummary {
     /// (`health::LOOP_OSCILLATING`: most of its last 2 s oscillated), as the
     /// device reports it over CAN.
     pub loop_hunting_fraction: f64,
+    /// Fraction of samples the monitor counted as no evidence because its
+    /// valve flow gains stood beyond what the valve model describes
+    /// (`health::VALVE_MISFIT`), as the device reports it over CAN.
+    pub valve_misfit_fraction: f64,
 }
 
 /// Most events a replay keeps in its summary.
@@ -288,11 +292,12 @@ pub fn replay<T: Real, R: BufRead>(
         loop_oscillation_share: None,
         loop_oscillation_hz: None,
         loop_hunting_fraction: 0.0,
+        valve_misfit_fraction: 0.0,
     };
     let mut loop_meter = oscillation::Meter::default();
     let (mut inconclusive, mut nis_sum, mut nis_n) = (0u64, 0.0, 0u64);
     let t0 = first.as_ref().map(|s| s.t_s);
-    let (mut mismatch, mut hunting) = (0u64, 0u64);
+    let (mut mismatch, mut hunting, mut misfit) = (0u64, 0u64, 0u64);
     let head = first.into_iter().chain(second).map(Ok);
     for sample in head.chain(reader) {
         let sample = sample?;
@@ -314,6 +319,9 @@ pub fn replay<T: Real, R: BufRead>(
         }
         if status.health & monitor::status::health::LOOP_OSCILLATING != 0 {
             hunting += 1;
+        }
+        if status.valve_model_misfit() {
+            misfit += 1;
         }
         if status.health & monitor::status::health::OUTLIER != 0 {
             summary.outlier_samples += 1;
@@ -358,6 +366,7 @@ pub fn replay<T: Real, R: BufRead>(
     summary.model_mismatch_fraction = fraction(mismatch);
     summary.inconclusive_fraction = round4(fraction(inconclusive));
     summary.loop_hunting_fraction = round4(fraction(hunting));
+    summary.valve_misfit_fraction = round4(fraction(misfit));
     summary.mean_nis = (nis_n > 0).then(|| round4(nis_sum / nis_n as f64));
     if let Some(o) = loop_meter.finish() {
         summary.loop_oscillation_share = Some(round4(o.share));
@@ -414,6 +423,13 @@ pub fn print_summary(s: &ReplaySummary, out: &mut dyn Write) -> std::io::Result<
             out,
             "warning     the model fits poorly on {:.0} % of samples: calibrate this installation (host-sim calibrate)",
             100.0 * s.model_mismatch_fraction
+        )?;
+    }
+    if s.valve_misfit_fraction >= crate::calibrate::WARN_VALVE_MISFIT_FRACTION {
+        writeln!(
+            out,
+            "warning     the valve flow gains stood beyond what the valve model describes on {:.0} % of samples: no evidence there (recalibrate this installation, or check the valve)",
+            100.0 * s.valve_misfit_fraction
         )?;
     }
     if let Some(share) = s

@@ -296,6 +296,46 @@ fn a_loop_that_hunts_is_measured_and_named_by_replay() {
 }
 
 #[test]
+fn replay_reports_the_share_of_samples_the_valve_model_did_not_describe() {
+    // The reference rig's recording replayed with its own parameters: the
+    // valve model fits. With both flow gains at half the rig's, the `both`
+    // filter's gains stand ~100 % off: those samples are no evidence, and
+    // the replay (like the CAN Health bit 14) says why.
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples");
+    let rig = root.join("reference-rig.toml");
+    let rec = root.join("healthy.csv.gz");
+    let misfit = |params: &Path| {
+        let out = host_sim_ok(&[
+            "replay",
+            "--json",
+            "--params",
+            params.to_str().unwrap(),
+            rec.to_str().unwrap(),
+        ]);
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        v["valve_misfit_fraction"].as_f64().unwrap()
+    };
+    assert_eq!(misfit(&rig), 0.0);
+    let dir = tempfile::tempdir().unwrap();
+    let half = std::fs::read_to_string(&rig).unwrap()
+        + "\n[valve]\nflow_gain_extend_lpm_sqrt_bar = 4.0\nflow_gain_retract_lpm_sqrt_bar = 3.7\n";
+    let half = write(dir.path(), "half-valve.toml", &half);
+    let share = misfit(&half);
+    assert!(share > 0.5, "{share}");
+    let out = host_sim_ok(&[
+        "replay",
+        "--params",
+        half.to_str().unwrap(),
+        rec.to_str().unwrap(),
+    ]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("beyond what the valve model describes"),
+        "{text}"
+    );
+}
+
+#[test]
 fn human_summary_without_json() {
     let dir = tempfile::tempdir().unwrap();
     let rec = write(dir.path(), "ok.csv", &format!("{HEADER}{ROW0}"));
