@@ -33,6 +33,29 @@ fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
 const HEADER: &str = "t,p_supply,p_piston,p_rod,p_tank,x_piston,u_valve\n";
 const ROW0: &str = "0.000,50.0,21.4,12.9,0.8,0.0412,0.0\n";
 
+/// `host-sim replay --params PARAMS REC`: the human summary.
+fn replay_text(params: &Path, rec: &Path) -> String {
+    let out = host_sim_ok(&[
+        "replay",
+        "--params",
+        params.to_str().unwrap(),
+        rec.to_str().unwrap(),
+    ]);
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+/// `host-sim replay --json --params PARAMS REC`: the summary JSON.
+fn replay_json(params: &Path, rec: &Path) -> serde_json::Value {
+    let out = host_sim_ok(&[
+        "replay",
+        "--json",
+        "--params",
+        params.to_str().unwrap(),
+        rec.to_str().unwrap(),
+    ]);
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
 fn assert_rejected(body: &str, must_contain: &[&str]) {
     let dir = tempfile::tempdir().unwrap();
     let p = write(dir.path(), "bad.csv", body);
@@ -189,16 +212,7 @@ fn replay_names_the_alarm_level_in_use() {
         std::fs::read_to_string(&reference).unwrap()
     );
     let floored = write(dir.path(), "floored.toml", &floored);
-    let json = |params: &Path| {
-        let out = host_sim_ok(&[
-            "replay",
-            "--json",
-            "--params",
-            params.to_str().unwrap(),
-            rec.to_str().unwrap(),
-        ]);
-        serde_json::from_slice::<serde_json::Value>(&out.stdout).unwrap()
-    };
+    let json = |params: &Path| replay_json(params, &rec);
     let v = json(&reference);
     assert_eq!(v["verdict"], "healthy");
     assert_eq!(v["alarm_level_internal_lpm"], 0.08);
@@ -215,13 +229,7 @@ fn replay_names_the_alarm_level_in_use() {
     assert_eq!(v["verdict"], "healthy");
     assert_eq!(v["alarm_level_internal_lpm"], 0.3);
     assert_eq!(v["alarm_level_external_lpm"], 0.69);
-    let out = host_sim_ok(&[
-        "replay",
-        "--params",
-        floored.to_str().unwrap(),
-        rec.to_str().unwrap(),
-    ]);
-    let text = String::from_utf8_lossy(&out.stdout);
+    let text = replay_text(&floored, &rec);
     assert!(
         text.contains("alarm level internal 0.300 l/min, external 0.690 l/min"),
         "{text}"
@@ -305,15 +313,9 @@ fn replay_reports_the_share_of_samples_the_valve_model_did_not_describe() {
     let rig = root.join("reference-rig.toml");
     let rec = root.join("healthy.csv.gz");
     let misfit = |params: &Path| {
-        let out = host_sim_ok(&[
-            "replay",
-            "--json",
-            "--params",
-            params.to_str().unwrap(),
-            rec.to_str().unwrap(),
-        ]);
-        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-        v["valve_misfit_fraction"].as_f64().unwrap()
+        replay_json(params, &rec)["valve_misfit_fraction"]
+            .as_f64()
+            .unwrap()
     };
     assert_eq!(misfit(&rig), 0.0);
     let dir = tempfile::tempdir().unwrap();
@@ -322,13 +324,7 @@ fn replay_reports_the_share_of_samples_the_valve_model_did_not_describe() {
     let half = write(dir.path(), "half-valve.toml", &half);
     let share = misfit(&half);
     assert!(share > 0.5, "{share}");
-    let out = host_sim_ok(&[
-        "replay",
-        "--params",
-        half.to_str().unwrap(),
-        rec.to_str().unwrap(),
-    ]);
-    let text = String::from_utf8_lossy(&out.stdout);
+    let text = replay_text(&half, &rec);
     assert!(
         text.contains("beyond what the valve model describes"),
         "{text}"

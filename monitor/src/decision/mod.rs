@@ -1210,7 +1210,7 @@ mod tests {
 
     /// `secs` s of `both`-filter outputs with valve gains `gain`
     /// (relative: extend, retract) of 1σ `sd`, reading `lpm` of internal
-    /// leak, from `t0` s on.
+    /// leak, from `t0` s on. Returns the last sample's flags.
     fn feed_valve_gains(
         d: &mut Decision<f64>,
         t0: f64,
@@ -1218,20 +1218,22 @@ mod tests {
         gain: [f64; 2],
         sd: f64,
         lpm: f64,
-    ) {
+    ) -> u16 {
         let mut events = Events::new();
         let mut out = outputs(lpm);
         for o in out.iter_mut().flatten() {
             o.valve_gain = gain;
         }
-        for i in 0..(secs * 1000.0) as usize {
+        let mut flags = 0;
+        for i in 0..(secs * 1000.0).round() as usize {
             let t = t0 + i as f64 * 0.001;
             let f = SampleFacts {
                 valve_gains_learned: [sd < GAIN_SETTLED_SD; 2],
                 ..facts(0.001, 1.0, true, 2, t)
             };
-            d.update(&out, f, &mut events);
+            flags = d.update(&out, f, &mut events);
         }
+        flags
     }
 
     /// 10 s of `both`-filter outputs with valve gains `gain` (relative:
@@ -1283,15 +1285,8 @@ mod tests {
             if learned_first {
                 feed_valve_gains(&mut d, 0.0, 5.0, [-0.004, 0.01], 0.008, 0.0);
             }
-            let mut out = outputs(0.0);
-            for o in out.iter_mut().flatten() {
-                o.valve_gain = bent;
-            }
-            let f = SampleFacts {
-                valve_gains_learned: [true; 2],
-                ..facts(0.001, 1.0, true, 2, 5.0)
-            };
-            d.update(&out, f, &mut Events::new())
+            // One sample bent past the limit.
+            feed_valve_gains(&mut d, 5.0, 0.001, bent, 0.008, 0.0)
         };
         let never_learned = flags_after(false);
         assert_ne!(never_learned & health::VALVE_MISFIT, 0);
@@ -1299,11 +1294,8 @@ mod tests {
         assert_eq!(flags_after(true) & health::VALVE_MISFIT, 0);
         // Within the limit: no flag.
         let mut d: Decision<f64> = Decision::new(&p);
-        let f = facts(0.001, 1.0, true, 2, 0.0);
-        assert_eq!(
-            d.update(&outputs(0.0), f, &mut Events::new()) & health::VALVE_MISFIT,
-            0
-        );
+        let within = feed_valve_gains(&mut d, 0.0, 0.001, [0.02, -0.02], 0.08, 0.0);
+        assert_eq!(within & health::VALVE_MISFIT, 0);
     }
 
     #[test]
