@@ -475,11 +475,8 @@ impl<T: Real> Decision<T> {
         let valid = valid && !misfit;
         self.count_evidence(dt, if valid { weight } else { T::ZERO });
         if !valid {
-            return if misfit {
-                health::EVIDENCE_PAUSED | health::VALVE_MISFIT
-            } else {
-                health::EVIDENCE_PAUSED
-            };
+            let why = if misfit { health::VALVE_MISFIT } else { 0 };
+            return health::EVIDENCE_PAUSED | why;
         }
         let a_evidence = (dt_w / self.slow_s).min(T::ONE);
         self.update_probabilities(out, dt_w, weight, a_evidence);
