@@ -33,27 +33,24 @@ fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
 const HEADER: &str = "t,p_supply,p_piston,p_rod,p_tank,x_piston,u_valve\n";
 const ROW0: &str = "0.000,50.0,21.4,12.9,0.8,0.0412,0.0\n";
 
+/// `host-sim replay [--json] --params PARAMS REC`, which must succeed.
+fn replay_with(params: &Path, rec: &Path, json: bool) -> Output {
+    let mut args = vec!["replay"];
+    if json {
+        args.push("--json");
+    }
+    args.extend(["--params", params.to_str().unwrap(), rec.to_str().unwrap()]);
+    host_sim_ok(&args)
+}
+
 /// `host-sim replay --params PARAMS REC`: the human summary.
 fn replay_text(params: &Path, rec: &Path) -> String {
-    let out = host_sim_ok(&[
-        "replay",
-        "--params",
-        params.to_str().unwrap(),
-        rec.to_str().unwrap(),
-    ]);
-    String::from_utf8_lossy(&out.stdout).into_owned()
+    String::from_utf8_lossy(&replay_with(params, rec, false).stdout).into_owned()
 }
 
 /// `host-sim replay --json --params PARAMS REC`: the summary JSON.
 fn replay_json(params: &Path, rec: &Path) -> serde_json::Value {
-    let out = host_sim_ok(&[
-        "replay",
-        "--json",
-        "--params",
-        params.to_str().unwrap(),
-        rec.to_str().unwrap(),
-    ]);
-    serde_json::from_slice(&out.stdout).unwrap()
+    serde_json::from_slice(&replay_with(params, rec, true).stdout).unwrap()
 }
 
 fn assert_rejected(body: &str, must_contain: &[&str]) {
@@ -177,13 +174,7 @@ fn replay_without_the_temperature_a_held_laminar_factor_needs_is_a_sensor_fault(
     );
     let held = write(dir.path(), "held.toml", &held);
     let rec = root.join("healthy.csv.gz");
-    let out = host_sim_ok(&[
-        "replay",
-        "--json",
-        "--params",
-        held.to_str().unwrap(),
-        rec.to_str().unwrap(),
-    ]);
+    let out = replay_with(&held, &rec, true);
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(
         err.contains("healthy.csv.gz") && err.contains("no temp_oil column"),

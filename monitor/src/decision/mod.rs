@@ -1242,6 +1242,14 @@ mod tests {
         (!d.latched().is_empty(), d.conclusive())
     }
 
+    /// A decision whose `both` filter learned its valve gains within the
+    /// limit (−0.4 %, +1 %, to 1σ 0.8 %) over the first 5 s.
+    fn with_learned_valve(p: &Params) -> Decision<f64> {
+        let mut d = Decision::new(p);
+        feed_valve_gains(&mut d, 0.0, 5.0, [-0.004, 0.01], 0.008, 0.0);
+        d
+    }
+
     #[test]
     fn a_learned_valve_gain_that_then_bends_past_the_limit_is_still_evidence() {
         // Development rig 2 (100 bar, 25 °C): the extend gain learned to
@@ -1250,8 +1258,7 @@ mod tests {
         let p = Params::nominal();
         let bent = [-1.1 * VALVE_GAIN_MISFIT, 0.01];
         let learned_then_bent = |lpm: f64| {
-            let mut d: Decision<f64> = Decision::new(&p);
-            feed_valve_gains(&mut d, 0.0, 5.0, [-0.004, 0.01], 0.008, 0.0);
+            let mut d = with_learned_valve(&p);
             feed_valve_gains(&mut d, 5.0, 5.0, bent, 0.008, lpm);
             (!d.latched().is_empty(), d.conclusive())
         };
@@ -1278,10 +1285,11 @@ mod tests {
         let p = Params::nominal();
         let bent = [-1.1 * VALVE_GAIN_MISFIT, 0.01];
         let flags_after = |learned_first: bool| {
-            let mut d: Decision<f64> = Decision::new(&p);
-            if learned_first {
-                feed_valve_gains(&mut d, 0.0, 5.0, [-0.004, 0.01], 0.008, 0.0);
-            }
+            let mut d = if learned_first {
+                with_learned_valve(&p)
+            } else {
+                Decision::new(&p)
+            };
             // One sample bent past the limit.
             feed_valve_gains(&mut d, 5.0, 0.001, bent, 0.008, 0.0)
         };
