@@ -38,6 +38,8 @@
 #               development rigs)                                → docs/evaluation.md (~10 min; 3 from the cache)
 #   survey4     host-sim eval --set survey4 --quick (48 fourth-survey
 #               development rigs)                                → docs/evaluation.md (~10 min; 3 from the cache)
+#   survey5     host-sim eval --set survey5 --quick (48 fifth-survey
+#               development rigs)                                → docs/evaluation.md (~10 min; 3 from the cache)
 #   dev-full    host-sim eval --set dev (full matrix, 522 runs)  → docs/evaluation.md (~15 min or more)
 # A block that has never been regenerated says so and names the commit its
 # figures were measured at; running its producer replaces that note.
@@ -272,10 +274,11 @@ for p in "${producers[@]}"; do
     survey2) eval_block survey2-quick --set survey2 --quick ;;
     survey3) eval_block survey3-quick --set survey3 --quick ;;
     survey4) eval_block survey4-quick --set survey4 --quick ;;
+    survey5) eval_block survey5-quick --set survey5 --quick ;;
     dev-full) eval_block dev-full --set dev ;;
     size) fig_size ;;
     bench) fig_bench ;;
-    *) echo "unknown producer: $p (examples golden throughput eval size bench holdout wide survey survey2 survey3 survey4 dev-full)"; exit 2 ;;
+    *) echo "unknown producer: $p (examples golden throughput eval size bench holdout wide survey survey2 survey3 survey4 survey5 dev-full)"; exit 2 ;;
   esac
 done
 step "done: review with git diff README.md docs/"

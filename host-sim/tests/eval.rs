@@ -374,6 +374,7 @@ fn holdout_rigs_never_appear_in_a_dev_run() {
         RigSet::Survey2,
         RigSet::Survey3,
         RigSet::Survey4,
+        RigSet::Survey5,
     ];
     for (i, a) in sets.iter().enumerate() {
         for b in &sets[i + 1..] {

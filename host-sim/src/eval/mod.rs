@@ -70,6 +70,12 @@ pub const SURVEY3_RIGS: [u64; 48] = consecutive(127);
 /// the others (reported separately). Disjoint from the other sets.
 pub const SURVEY4_RIGS: [u64; 48] = consecutive(175);
 
+/// Fifth survey rigs (seeds 223–270): set aside at the end of the ninth
+/// session of 2026-12-05 and first run, untuned, at the start of the
+/// next, before anything in it was looked at; from then on tuned on like
+/// the others (reported separately). Disjoint from the other sets.
+pub const SURVEY5_RIGS: [u64; 48] = consecutive(223);
+
 /// `N` consecutive seeds from `first`.
 const fn consecutive<const N: usize>(first: u64) -> [u64; N] {
     let mut seeds = [0; N];
@@ -99,6 +105,8 @@ pub enum RigSet {
     Survey3,
     /// [`SURVEY4_RIGS`].
     Survey4,
+    /// [`SURVEY5_RIGS`].
+    Survey5,
 }
 
 impl RigSet {
@@ -112,6 +120,7 @@ impl RigSet {
             Self::Survey2 => &SURVEY2_RIGS,
             Self::Survey3 => &SURVEY3_RIGS,
             Self::Survey4 => &SURVEY4_RIGS,
+            Self::Survey5 => &SURVEY5_RIGS,
         }
     }
 
@@ -125,6 +134,7 @@ impl RigSet {
             Self::Survey2 => "survey2",
             Self::Survey3 => "survey3",
             Self::Survey4 => "survey4",
+            Self::Survey5 => "survey5",
         }
     }
 }
@@ -152,6 +162,9 @@ pub enum SetChoice {
     /// A fourth survey sample (seeds 175–222), first run untuned at the
     /// start of the ninth session of 2026-12-05 (use with `--quick`).
     Survey4,
+    /// A fifth survey sample (seeds 223–270), first run untuned at the
+    /// start of the first session of 2026-12-06 (use with `--quick`).
+    Survey5,
 }
 
 impl SetChoice {
@@ -166,6 +179,7 @@ impl SetChoice {
             Self::Survey2 => vec![RigSet::Survey2],
             Self::Survey3 => vec![RigSet::Survey3],
             Self::Survey4 => vec![RigSet::Survey4],
+            Self::Survey5 => vec![RigSet::Survey5],
         }
     }
 }

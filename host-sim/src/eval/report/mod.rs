@@ -122,6 +122,7 @@ pub fn markdown(ev: &Evaluation) -> String {
         RigSet::Survey2,
         RigSet::Survey3,
         RigSet::Survey4,
+        RigSet::Survey5,
         RigSet::Holdout,
     ] {
         let cells: Vec<&CellResult> = ev.cells.iter().filter(|c| c.cell.set == set).collect();
@@ -147,6 +148,7 @@ fn set_report(out: &mut String, set: RigSet, cells: &[&CellResult], runs: &[&Run
         RigSet::Survey2 => "Second survey development rigs",
         RigSet::Survey3 => "Third survey development rigs",
         RigSet::Survey4 => "Fourth survey development rigs",
+        RigSet::Survey5 => "Fifth survey development rigs",
     };
     let _ = writeln!(
         out,
