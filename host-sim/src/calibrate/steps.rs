@@ -370,6 +370,18 @@ fn laminar_factor_mode(
             ),
             quality: "the recording reads the oil temperature: the viscosity follows it".into(),
         });
+    } else {
+        // Said because it costs: free, the factor takes in part of a leak
+        // at a hold (docs/calibration.md gives the measured cost).
+        fits.push(Fit {
+            what: "healthy laminar leakage factor".into(),
+            value: format!(
+                "free (prior {:.0} %, random walk {:.1} %/√s): no oil temperature in the recording",
+                100.0 * p.filter.laminar_prior,
+                100.0 * p.filter.q_laminar.sqrt()
+            ),
+            quality: "it also takes in part of a leak at a hold: record temp_oil to hold it and see such leaks at their flow".into(),
+        });
     }
 }
 
@@ -520,10 +532,16 @@ mod tests {
 
     /// `p` after the laminar mode step for a recording with or without
     /// the oil temperature, and the warnings it gave.
-    fn moded(mut p: Params, temperature: bool) -> (Params, Vec<String>) {
-        let mut warnings = Vec::new();
-        laminar_factor_mode(&mut p, temperature, &mut Vec::new(), &mut warnings);
-        (p, warnings)
+    fn moded(p: Params, temperature: bool) -> (Params, Vec<String>) {
+        moded_fits(p, temperature).0
+    }
+
+    /// As [`moded`], with the report's line on the factor.
+    fn moded_fits(mut p: Params, temperature: bool) -> ((Params, Vec<String>), Fit) {
+        let (mut warnings, mut fits) = (Vec::new(), Vec::new());
+        laminar_factor_mode(&mut p, temperature, &mut fits, &mut warnings);
+        assert_eq!(fits.len(), 1, "one line on the factor, held or free");
+        ((p, warnings), fits.remove(0))
     }
 
     #[test]
@@ -562,9 +580,18 @@ mod tests {
         assert_eq!(freed.filter.laminar_prior, nominal.filter.laminar_prior);
         assert!((freed.valve.edge_leak_lpm_per_bar - edge).abs() < 1e-15);
         assert!(w[0].starts_with("healthy laminar leakage factor set free"));
-        // Free parameters stay free without it.
-        let (free, w) = moded(nominal.clone(), false);
+        // Free parameters stay free without it; the report says so and
+        // what it costs.
+        let ((free, w), line) = moded_fits(nominal.clone(), false);
         assert_eq!(free.filter.q_laminar, nominal.filter.q_laminar);
         assert!(w.is_empty());
+        assert!(line.value.starts_with("free (prior 50 %"), "{}", line.value);
+        assert!(line.quality.contains("record temp_oil"), "{}", line.quality);
+        let (_, held_line) = moded_fits(nominal.clone(), true);
+        assert!(
+            held_line.value.starts_with("held (prior 5 %"),
+            "{}",
+            held_line.value
+        );
     }
 }
