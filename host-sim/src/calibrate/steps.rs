@@ -334,7 +334,8 @@ fn has_temperature(samples: &[&[Sample]]) -> bool {
 ///
 /// Start parameters that already hold it (an installation file calibrated
 /// before) keep their land leakage; without a temperature reading they
-/// are set free again, with a warning.
+/// are set free again, with a warning. Either way the report gets one
+/// line on the factor; a free one names its cost at holds and the remedy.
 fn laminar_factor_mode(
     p: &mut Params,
     temperature: bool,
