@@ -366,16 +366,7 @@ fn leak_targets_use_medians_per_kind_and_size() {
 #[test]
 fn holdout_rigs_never_appear_in_a_dev_run() {
     // Every rig set is disjoint from every other (held-out seeds above all).
-    let sets = [
-        RigSet::Dev,
-        RigSet::Holdout,
-        RigSet::Wide,
-        RigSet::Survey,
-        RigSet::Survey2,
-        RigSet::Survey3,
-        RigSet::Survey4,
-        RigSet::Survey5,
-    ];
+    let sets = RigSet::ALL;
     for (i, a) in sets.iter().enumerate() {
         for b in &sets[i + 1..] {
             for s in a.seeds() {

@@ -110,6 +110,20 @@ pub enum RigSet {
 }
 
 impl RigSet {
+    /// Every set, in report order: development sets first, held-out last.
+    /// A new set goes here too (the report and the disjointness test read
+    /// this list).
+    pub const ALL: [RigSet; 8] = [
+        Self::Dev,
+        Self::Wide,
+        Self::Survey,
+        Self::Survey2,
+        Self::Survey3,
+        Self::Survey4,
+        Self::Survey5,
+        Self::Holdout,
+    ];
+
     /// The rig seeds of the set.
     pub fn seeds(self) -> &'static [u64] {
         match self {

@@ -115,16 +115,7 @@ pub fn markdown(ev: &Evaluation) -> String {
             "**calibration off**: every cell uses the start parameters"
         },
     );
-    for set in [
-        RigSet::Dev,
-        RigSet::Wide,
-        RigSet::Survey,
-        RigSet::Survey2,
-        RigSet::Survey3,
-        RigSet::Survey4,
-        RigSet::Survey5,
-        RigSet::Holdout,
-    ] {
+    for set in RigSet::ALL {
         let cells: Vec<&CellResult> = ev.cells.iter().filter(|c| c.cell.set == set).collect();
         if cells.is_empty() {
             continue;
