@@ -361,29 +361,32 @@ fn laminar_factor_mode(
         }
         _ => {}
     }
-    if temperature {
-        fits.push(Fit {
-            what: "healthy laminar leakage factor".into(),
-            value: format!(
+    let (value, quality) = if temperature {
+        (
+            format!(
                 "held (prior {:.0} %, no random walk); land leakage {:.4} l/min/bar per covered edge",
                 100.0 * p.filter.laminar_prior,
                 p.valve.edge_leak_lpm_per_bar
             ),
-            quality: "the recording reads the oil temperature: the viscosity follows it".into(),
-        });
+            "the recording reads the oil temperature: the viscosity follows it",
+        )
     } else {
         // Said because it costs: free, the factor takes in part of a leak
         // at a hold (docs/calibration.md gives the measured cost).
-        fits.push(Fit {
-            what: "healthy laminar leakage factor".into(),
-            value: format!(
+        (
+            format!(
                 "free (prior {:.0} %, random walk {:.1} %/√s): no oil temperature in the recording",
                 100.0 * p.filter.laminar_prior,
                 100.0 * p.filter.q_laminar.sqrt()
             ),
-            quality: "it also takes in part of a leak at a hold: record temp_oil to hold it and see such leaks at their flow".into(),
-        });
-    }
+            "it also takes in part of a leak at a hold: record temp_oil to hold it and see such leaks at their flow",
+        )
+    };
+    fits.push(Fit {
+        what: "healthy laminar leakage factor".into(),
+        value,
+        quality: quality.into(),
+    });
 }
 
 /// The regressions' quality against the refusal thresholds.
@@ -532,17 +535,13 @@ mod tests {
     use super::*;
 
     /// `p` after the laminar mode step for a recording with or without
-    /// the oil temperature, and the warnings it gave.
-    fn moded(p: Params, temperature: bool) -> (Params, Vec<String>) {
-        moded_fits(p, temperature).0
-    }
-
-    /// As [`moded`], with the report's line on the factor.
-    fn moded_fits(mut p: Params, temperature: bool) -> ((Params, Vec<String>), Fit) {
+    /// the oil temperature, the warnings it gave and the report's line on
+    /// the factor.
+    fn moded(mut p: Params, temperature: bool) -> (Params, Vec<String>, Fit) {
         let (mut warnings, mut fits) = (Vec::new(), Vec::new());
         laminar_factor_mode(&mut p, temperature, &mut fits, &mut warnings);
         assert_eq!(fits.len(), 1, "one line on the factor, held or free");
-        ((p, warnings), fits.remove(0))
+        (p, warnings, fits.remove(0))
     }
 
     #[test]
@@ -552,7 +551,7 @@ mod tests {
         let mut p = Params::nominal();
         p.filter.q_laminar = 0.0;
         p.filter.laminar_prior = 0.2;
-        let (freed, w) = moded(p, false);
+        let (freed, w, _) = moded(p, false);
         assert!(!freed.laminar_factor_held());
         assert_eq!(w.len(), 1);
     }
@@ -560,7 +559,7 @@ mod tests {
     #[test]
     fn the_laminar_factor_is_held_once_and_set_free_without_a_temperature() {
         let nominal = Params::nominal();
-        let (held, w) = moded(nominal.clone(), true);
+        let (held, w, _) = moded(nominal.clone(), true);
         assert_eq!(held.filter.q_laminar, HELD_Q_LAMINAR);
         assert_eq!(held.filter.laminar_prior, HELD_LAMINAR_PRIOR);
         let edge = nominal.valve.edge_leak_lpm_per_bar;
@@ -570,25 +569,25 @@ mod tests {
         );
         assert!(w.is_empty());
         // Calibrating again from the held file does not scale twice.
-        let (again, _) = moded(held.clone(), true);
+        let (again, _, _) = moded(held.clone(), true);
         assert_eq!(
             again.valve.edge_leak_lpm_per_bar,
             held.valve.edge_leak_lpm_per_bar
         );
         // A recording without the temperature frees it, and says so.
-        let (freed, w) = moded(held, false);
+        let (freed, w, _) = moded(held, false);
         assert_eq!(freed.filter.q_laminar, nominal.filter.q_laminar);
         assert_eq!(freed.filter.laminar_prior, nominal.filter.laminar_prior);
         assert!((freed.valve.edge_leak_lpm_per_bar - edge).abs() < 1e-15);
         assert!(w[0].starts_with("healthy laminar leakage factor set free"));
         // Free parameters stay free without it; the report says so and
         // what it costs.
-        let ((free, w), line) = moded_fits(nominal.clone(), false);
+        let (free, w, line) = moded(nominal.clone(), false);
         assert_eq!(free.filter.q_laminar, nominal.filter.q_laminar);
         assert!(w.is_empty());
         assert!(line.value.starts_with("free (prior 50 %"), "{}", line.value);
         assert!(line.quality.contains("record temp_oil"), "{}", line.quality);
-        let (_, held_line) = moded_fits(nominal.clone(), true);
+        let (_, _, held_line) = moded(nominal.clone(), true);
         assert!(
             held_line.value.starts_with("held (prior 5 %"),
             "{}",
