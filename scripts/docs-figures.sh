@@ -40,6 +40,8 @@
 #               development rigs)                                → docs/evaluation.md (~10 min; 3 from the cache)
 #   survey5     host-sim eval --set survey5 --quick (48 fifth-survey
 #               development rigs)                                → docs/evaluation.md (~10 min; 3 from the cache)
+#   survey6     host-sim eval --set survey6 --quick (48 sixth-survey
+#               development rigs)                                → docs/evaluation.md (~10 min; 3 from the cache)
 #   dev-full    host-sim eval --set dev (full matrix, 522 runs)  → docs/evaluation.md (~15 min or more)
 # A block that has never been regenerated says so and names the commit its
 # figures were measured at; running its producer replaces that note.
@@ -275,10 +277,11 @@ for p in "${producers[@]}"; do
     survey3) eval_block survey3-quick --set survey3 --quick ;;
     survey4) eval_block survey4-quick --set survey4 --quick ;;
     survey5) eval_block survey5-quick --set survey5 --quick ;;
+    survey6) eval_block survey6-quick --set survey6 --quick ;;
     dev-full) eval_block dev-full --set dev ;;
     size) fig_size ;;
     bench) fig_bench ;;
-    *) echo "unknown producer: $p (examples golden throughput eval size bench holdout wide survey survey2 survey3 survey4 survey5 dev-full)"; exit 2 ;;
+    *) echo "unknown producer: $p (examples golden throughput eval size bench holdout wide survey survey2 survey3 survey4 survey5 survey6 dev-full)"; exit 2 ;;
   esac
 done
 step "done: review with git diff README.md docs/"

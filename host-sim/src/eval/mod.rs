@@ -76,6 +76,12 @@ pub const SURVEY4_RIGS: [u64; 48] = consecutive(175);
 /// the others (reported separately). Disjoint from the other sets.
 pub const SURVEY5_RIGS: [u64; 48] = consecutive(223);
 
+/// Sixth survey rigs (seeds 271–318): set aside at the end of the first
+/// session of 2026-12-06 and first run, untuned, at the start of the
+/// next, before anything in it was looked at; from then on tuned on like
+/// the others (reported separately). Disjoint from the other sets.
+pub const SURVEY6_RIGS: [u64; 48] = consecutive(271);
+
 /// `N` consecutive seeds from `first`.
 const fn consecutive<const N: usize>(first: u64) -> [u64; N] {
     let mut seeds = [0; N];
@@ -107,13 +113,15 @@ pub enum RigSet {
     Survey4,
     /// [`SURVEY5_RIGS`].
     Survey5,
+    /// [`SURVEY6_RIGS`].
+    Survey6,
 }
 
 impl RigSet {
     /// Every set, in report order: development sets first, held-out last.
     /// A new set goes here too (the report and the disjointness test read
     /// this list).
-    pub const ALL: [RigSet; 8] = [
+    pub const ALL: [RigSet; 9] = [
         Self::Dev,
         Self::Wide,
         Self::Survey,
@@ -121,6 +129,7 @@ impl RigSet {
         Self::Survey3,
         Self::Survey4,
         Self::Survey5,
+        Self::Survey6,
         Self::Holdout,
     ];
 
@@ -135,6 +144,7 @@ impl RigSet {
             Self::Survey3 => &SURVEY3_RIGS,
             Self::Survey4 => &SURVEY4_RIGS,
             Self::Survey5 => &SURVEY5_RIGS,
+            Self::Survey6 => &SURVEY6_RIGS,
         }
     }
 
@@ -149,6 +159,7 @@ impl RigSet {
             Self::Survey3 => "survey3",
             Self::Survey4 => "survey4",
             Self::Survey5 => "survey5",
+            Self::Survey6 => "survey6",
         }
     }
 }
@@ -179,6 +190,9 @@ pub enum SetChoice {
     /// A fifth survey sample (seeds 223–270), first run untuned at the
     /// start of the first session of 2026-12-06 (use with `--quick`).
     Survey5,
+    /// A sixth survey sample (seeds 271–318), first run untuned at the
+    /// start of the second session of 2026-12-06 (use with `--quick`).
+    Survey6,
 }
 
 impl SetChoice {
@@ -194,6 +208,7 @@ impl SetChoice {
             Self::Survey3 => vec![RigSet::Survey3],
             Self::Survey4 => vec![RigSet::Survey4],
             Self::Survey5 => vec![RigSet::Survey5],
+            Self::Survey6 => vec![RigSet::Survey6],
         }
     }
 }

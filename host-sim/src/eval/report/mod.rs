@@ -140,6 +140,7 @@ fn set_report(out: &mut String, set: RigSet, cells: &[&CellResult], runs: &[&Run
         RigSet::Survey3 => "Third survey development rigs",
         RigSet::Survey4 => "Fourth survey development rigs",
         RigSet::Survey5 => "Fifth survey development rigs",
+        RigSet::Survey6 => "Sixth survey development rigs",
     };
     let _ = writeln!(
         out,
