@@ -5,7 +5,7 @@ use host_sim::eval::exec::{self, Alarm, TruthSummary};
 use host_sim::eval::report::{self, Target};
 use host_sim::eval::{
     self, plan, Category, Cell, ExecConfig, FaultKind, PlanConfig, RigSet, RunResult, RunSpec,
-    DEV_RIGS, HOLDOUT_RIGS, WIDE_RIGS,
+    SetChoice, DEV_RIGS, HOLDOUT_RIGS, WIDE_RIGS,
 };
 use monitor::Params;
 use std::time::Instant;
@@ -743,4 +743,26 @@ fn where_the_time_goes() {
             spec.id, r.samples
         );
     }
+}
+
+#[test]
+fn every_rig_set_is_a_set_choice_by_its_name() {
+    use clap::ValueEnum;
+    // `--set` takes each set of `RigSet::ALL` by its name, once, and
+    // `both`; nothing else.
+    let names: Vec<String> = SetChoice::value_variants()
+        .iter()
+        .filter_map(|c| c.to_possible_value())
+        .map(|v| v.get_name().to_string())
+        .collect();
+    assert_eq!(names.len(), RigSet::ALL.len() + 1, "{names:?}");
+    for set in RigSet::ALL {
+        let choice = SetChoice::from_str(set.name(), false)
+            .unwrap_or_else(|e| panic!("{}: {e}", set.name()));
+        assert_eq!(choice.sets(), vec![set]);
+        assert_eq!(names.iter().filter(|n| *n == set.name()).count(), 1);
+    }
+    let both = SetChoice::from_str("both", false).expect("both");
+    assert_eq!(both.sets(), vec![RigSet::Dev, RigSet::Holdout]);
+    assert!(SetChoice::from_str("survey99", false).is_err());
 }

@@ -1,7 +1,7 @@
 //! `host-sim eval`: the monitor on the independent test plant.
 
 use anyhow::{Context, Result};
-use host_sim::eval::{self, SetChoice};
+use host_sim::eval::{self, RigSet, SetChoice};
 use std::io::Write;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -11,7 +11,7 @@ pub struct Args {
     /// Rig set: the development rigs, the held-out rigs (fixed in
     /// advance; report only, never tune on them), both, or the further
     /// development rigs (more of the population to find failures on).
-    #[arg(long, value_enum, default_value_t = SetChoice::Dev)]
+    #[arg(long, value_enum, default_value_t = SetChoice::One(RigSet::Dev))]
     set: SetChoice,
     /// Only the first N rigs of each set.
     #[arg(long, value_name = "N")]

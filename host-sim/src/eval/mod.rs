@@ -162,54 +162,85 @@ impl RigSet {
             Self::Survey6 => "survey6",
         }
     }
+
+    /// What the set is for (`--set` help).
+    pub fn about(self) -> &'static str {
+        match self {
+            Self::Dev => "The development rigs",
+            Self::Holdout => "The held-out rigs",
+            Self::Wide => "Further development rigs (seeds 7–30), to find failures on",
+            Self::Survey => {
+                "A larger sample of development rigs (seeds 31–78), for rare failures (use with `--quick`)"
+            }
+            Self::Survey2 => {
+                "A second survey sample (seeds 79–126), first run untuned on 2026-12-05 (use with `--quick`)"
+            }
+            Self::Survey3 => {
+                "A third survey sample (seeds 127–174), first run untuned in the session after (use with `--quick`)"
+            }
+            Self::Survey4 => {
+                "A fourth survey sample (seeds 175–222), first run untuned at the start of the ninth session of 2026-12-05 (use with `--quick`)"
+            }
+            Self::Survey5 => {
+                "A fifth survey sample (seeds 223–270), first run untuned at the start of the first session of 2026-12-06 (use with `--quick`)"
+            }
+            Self::Survey6 => {
+                "A sixth survey sample (seeds 271–318), first run untuned at the start of the second session of 2026-12-06 (use with `--quick`)"
+            }
+        }
+    }
 }
 
-/// Which rig sets to evaluate (command line).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+/// Which rig sets to evaluate (command line `--set`): one set by its
+/// name ([`RigSet::name`]), or `both`. Its values come from
+/// [`RigSet::ALL`], so a new set is added there only.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum SetChoice {
-    /// The development rigs.
-    Dev,
-    /// The held-out rigs.
-    Holdout,
-    /// Both, reported separately.
+    /// One set.
+    One(RigSet),
+    /// The development and the held-out rigs, reported separately.
     Both,
-    /// Further development rigs (seeds 7–30), to find failures on.
-    Wide,
-    /// A larger sample of development rigs (seeds 31–78), for rare
-    /// failures (use with `--quick`).
-    Survey,
-    /// A second survey sample (seeds 79–126), first run untuned on
-    /// 2026-12-05 (use with `--quick`).
-    Survey2,
-    /// A third survey sample (seeds 127–174), first run untuned in the
-    /// session after (use with `--quick`).
-    Survey3,
-    /// A fourth survey sample (seeds 175–222), first run untuned at the
-    /// start of the ninth session of 2026-12-05 (use with `--quick`).
-    Survey4,
-    /// A fifth survey sample (seeds 223–270), first run untuned at the
-    /// start of the first session of 2026-12-06 (use with `--quick`).
-    Survey5,
-    /// A sixth survey sample (seeds 271–318), first run untuned at the
-    /// start of the second session of 2026-12-06 (use with `--quick`).
-    Survey6,
 }
 
 impl SetChoice {
+    /// Every choice in `--help` order: the development rigs, the held-out
+    /// ones, both, then the further development sets.
+    const ALL: [SetChoice; RigSet::ALL.len() + 1] = {
+        let mut out = [SetChoice::Both; RigSet::ALL.len() + 1];
+        out[0] = SetChoice::One(RigSet::Dev);
+        out[1] = SetChoice::One(RigSet::Holdout);
+        let (mut i, mut k) = (0, 3);
+        while i < RigSet::ALL.len() {
+            let set = RigSet::ALL[i];
+            if !matches!(set, RigSet::Dev | RigSet::Holdout) {
+                out[k] = SetChoice::One(set);
+                k += 1;
+            }
+            i += 1;
+        }
+        out
+    };
+
     /// The sets, in report order.
     pub fn sets(self) -> Vec<RigSet> {
         match self {
-            Self::Dev => vec![RigSet::Dev],
-            Self::Holdout => vec![RigSet::Holdout],
+            Self::One(set) => vec![set],
             Self::Both => vec![RigSet::Dev, RigSet::Holdout],
-            Self::Wide => vec![RigSet::Wide],
-            Self::Survey => vec![RigSet::Survey],
-            Self::Survey2 => vec![RigSet::Survey2],
-            Self::Survey3 => vec![RigSet::Survey3],
-            Self::Survey4 => vec![RigSet::Survey4],
-            Self::Survey5 => vec![RigSet::Survey5],
-            Self::Survey6 => vec![RigSet::Survey6],
         }
+    }
+}
+
+impl clap::ValueEnum for SetChoice {
+    fn value_variants<'a>() -> &'a [Self] {
+        &Self::ALL
+    }
+
+    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
+        let (name, help) = match self {
+            Self::One(set) => (set.name(), set.about()),
+            Self::Both => ("both", "Both, reported separately"),
+        };
+        Some(clap::builder::PossibleValue::new(name).help(help))
     }
 }
 
