@@ -119,8 +119,8 @@ pub enum RigSet {
 
 impl RigSet {
     /// Every set, in report order: development sets first, held-out last.
-    /// A new set goes here too (the report and the disjointness test read
-    /// this list).
+    /// A new set goes here too (the report, `--set` and the disjointness
+    /// test read this list).
     pub const ALL: [RigSet; 9] = [
         Self::Dev,
         Self::Wide,
@@ -192,8 +192,8 @@ impl RigSet {
 }
 
 /// Which rig sets to evaluate (command line `--set`): one set by its
-/// name ([`RigSet::name`]), or `both`. Its values come from
-/// [`RigSet::ALL`], so a new set is added there only.
+/// name ([`RigSet::name`], help [`RigSet::about`]), or `both`. Its
+/// values come from [`RigSet::ALL`]: a new set needs nothing here.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum SetChoice {
     /// One set.
