@@ -163,6 +163,21 @@ impl RigSet {
         }
     }
 
+    /// The report's heading for the set.
+    pub fn title(self) -> &'static str {
+        match self {
+            Self::Dev => "Development rigs",
+            Self::Holdout => "Held-out rigs",
+            Self::Wide => "Further development rigs",
+            Self::Survey => "Survey development rigs",
+            Self::Survey2 => "Second survey development rigs",
+            Self::Survey3 => "Third survey development rigs",
+            Self::Survey4 => "Fourth survey development rigs",
+            Self::Survey5 => "Fifth survey development rigs",
+            Self::Survey6 => "Sixth survey development rigs",
+        }
+    }
+
     /// What the set is for (`--set` help).
     pub fn about(self) -> &'static str {
         match self {
@@ -193,7 +208,8 @@ impl RigSet {
 
 /// Which rig sets to evaluate (command line `--set`): one set by its
 /// name ([`RigSet::name`], help [`RigSet::about`]), or `both`. Its
-/// values come from [`RigSet::ALL`]: a new set needs nothing here.
+/// values come from [`RigSet::ALL`]: a new set is added to `RigSet`
+/// alone (variant, `ALL`, seeds, name, title, about).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum SetChoice {
     /// One set.

@@ -131,17 +131,7 @@ fn set_report(out: &mut String, set: RigSet, cells: &[&CellResult], runs: &[&Run
     seeds.dedup();
     let with: Vec<u64> = seeds.iter().copied().filter(|s| s % 2 == 0).collect();
     let without: Vec<u64> = seeds.iter().copied().filter(|s| s % 2 == 1).collect();
-    let title = match set {
-        RigSet::Dev => "Development rigs",
-        RigSet::Holdout => "Held-out rigs",
-        RigSet::Wide => "Further development rigs",
-        RigSet::Survey => "Survey development rigs",
-        RigSet::Survey2 => "Second survey development rigs",
-        RigSet::Survey3 => "Third survey development rigs",
-        RigSet::Survey4 => "Fourth survey development rigs",
-        RigSet::Survey5 => "Fifth survey development rigs",
-        RigSet::Survey6 => "Sixth survey development rigs",
-    };
+    let title = set.title();
     let _ = writeln!(
         out,
         "## {title} (seeds {}): {} runs\n\n`temp_oil` column on rigs {}, off on rigs {}.\n",
