@@ -135,81 +135,93 @@ impl RigSet {
 
     /// The rig seeds of the set.
     pub fn seeds(self) -> &'static [u64] {
-        match self {
-            Self::Dev => &DEV_RIGS,
-            Self::Holdout => &HOLDOUT_RIGS,
-            Self::Wide => &WIDE_RIGS,
-            Self::Survey => &SURVEY_RIGS,
-            Self::Survey2 => &SURVEY2_RIGS,
-            Self::Survey3 => &SURVEY3_RIGS,
-            Self::Survey4 => &SURVEY4_RIGS,
-            Self::Survey5 => &SURVEY5_RIGS,
-            Self::Survey6 => &SURVEY6_RIGS,
-        }
+        self.facts().seeds
     }
 
-    /// Lower-case name.
+    /// Lower-case name (`--set`, the JSON's `set`).
     pub fn name(self) -> &'static str {
-        match self {
-            Self::Dev => "dev",
-            Self::Holdout => "holdout",
-            Self::Wide => "wide",
-            Self::Survey => "survey",
-            Self::Survey2 => "survey2",
-            Self::Survey3 => "survey3",
-            Self::Survey4 => "survey4",
-            Self::Survey5 => "survey5",
-            Self::Survey6 => "survey6",
-        }
+        self.facts().name
     }
 
     /// The report's heading for the set.
     pub fn title(self) -> &'static str {
-        match self {
-            Self::Dev => "Development rigs",
-            Self::Holdout => "Held-out rigs",
-            Self::Wide => "Further development rigs",
-            Self::Survey => "Survey development rigs",
-            Self::Survey2 => "Second survey development rigs",
-            Self::Survey3 => "Third survey development rigs",
-            Self::Survey4 => "Fourth survey development rigs",
-            Self::Survey5 => "Fifth survey development rigs",
-            Self::Survey6 => "Sixth survey development rigs",
-        }
+        self.facts().title
     }
 
     /// What the set is for (`--set` help).
     pub fn about(self) -> &'static str {
-        match self {
-            Self::Dev => "The development rigs",
-            Self::Holdout => "The held-out rigs",
-            Self::Wide => "Further development rigs (seeds 7–30), to find failures on",
-            Self::Survey => {
-                "A larger sample of development rigs (seeds 31–78), for rare failures (use with `--quick`)"
-            }
-            Self::Survey2 => {
-                "A second survey sample (seeds 79–126), first run untuned on 2026-12-05 (use with `--quick`)"
-            }
-            Self::Survey3 => {
-                "A third survey sample (seeds 127–174), first run untuned in the session after (use with `--quick`)"
-            }
-            Self::Survey4 => {
-                "A fourth survey sample (seeds 175–222), first run untuned at the start of the ninth session of 2026-12-05 (use with `--quick`)"
-            }
-            Self::Survey5 => {
-                "A fifth survey sample (seeds 223–270), first run untuned at the start of the first session of 2026-12-06 (use with `--quick`)"
-            }
-            Self::Survey6 => {
-                "A sixth survey sample (seeds 271–318), first run untuned at the start of the second session of 2026-12-06 (use with `--quick`)"
-            }
+        self.facts().about
+    }
+
+    /// Everything said about the set, in one place per set.
+    fn facts(self) -> SetFacts {
+        let (seeds, name, title, about): (&'static [u64], _, _, _) = match self {
+            Self::Dev => (&DEV_RIGS, "dev", "Development rigs", "The development rigs"),
+            Self::Holdout => (&HOLDOUT_RIGS, "holdout", "Held-out rigs", "The held-out rigs"),
+            Self::Wide => (
+                &WIDE_RIGS,
+                "wide",
+                "Further development rigs",
+                "Further development rigs (seeds 7–30), to find failures on",
+            ),
+            Self::Survey => (
+                &SURVEY_RIGS,
+                "survey",
+                "Survey development rigs",
+                "A larger sample of development rigs (seeds 31–78), for rare failures (use with `--quick`)",
+            ),
+            Self::Survey2 => (
+                &SURVEY2_RIGS,
+                "survey2",
+                "Second survey development rigs",
+                "A second survey sample (seeds 79–126), first run untuned on 2026-12-05 (use with `--quick`)",
+            ),
+            Self::Survey3 => (
+                &SURVEY3_RIGS,
+                "survey3",
+                "Third survey development rigs",
+                "A third survey sample (seeds 127–174), first run untuned in the session after (use with `--quick`)",
+            ),
+            Self::Survey4 => (
+                &SURVEY4_RIGS,
+                "survey4",
+                "Fourth survey development rigs",
+                "A fourth survey sample (seeds 175–222), first run untuned at the start of the ninth session of 2026-12-05 (use with `--quick`)",
+            ),
+            Self::Survey5 => (
+                &SURVEY5_RIGS,
+                "survey5",
+                "Fifth survey development rigs",
+                "A fifth survey sample (seeds 223–270), first run untuned at the start of the first session of 2026-12-06 (use with `--quick`)",
+            ),
+            Self::Survey6 => (
+                &SURVEY6_RIGS,
+                "survey6",
+                "Sixth survey development rigs",
+                "A sixth survey sample (seeds 271–318), first run untuned at the start of the second session of 2026-12-06 (use with `--quick`)",
+            ),
+        };
+        SetFacts {
+            seeds,
+            name,
+            title,
+            about,
         }
     }
+}
+
+/// What [`RigSet`]'s accessors read.
+struct SetFacts {
+    seeds: &'static [u64],
+    name: &'static str,
+    title: &'static str,
+    about: &'static str,
 }
 
 /// Which rig sets to evaluate (command line `--set`): one set by its
 /// name ([`RigSet::name`], help [`RigSet::about`]), or `both`. Its
 /// values come from [`RigSet::ALL`]: a new set is added to `RigSet`
-/// alone (variant, `ALL`, seeds, name, title, about).
+/// alone (its variant, `ALL` and its arm of `RigSet::facts`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum SetChoice {
     /// One set.
