@@ -32,16 +32,8 @@
 #               development rigs)                                → docs/evaluation.md (~6 min; 2 from the cache)
 #   survey      host-sim eval --set survey --quick (48 survey
 #               development rigs)                                → docs/evaluation.md (~20 min; 3 from the cache)
-#   survey2     host-sim eval --set survey2 --quick (48 second-survey
-#               development rigs)                                → docs/evaluation.md (~10 min; 3 from the cache)
-#   survey3     host-sim eval --set survey3 --quick (48 third-survey
-#               development rigs)                                → docs/evaluation.md (~10 min; 3 from the cache)
-#   survey4     host-sim eval --set survey4 --quick (48 fourth-survey
-#               development rigs)                                → docs/evaluation.md (~10 min; 3 from the cache)
-#   survey5     host-sim eval --set survey5 --quick (48 fifth-survey
-#               development rigs)                                → docs/evaluation.md (~10 min; 3 from the cache)
-#   survey6     host-sim eval --set survey6 --quick (48 sixth-survey
-#               development rigs)                                → docs/evaluation.md (~10 min; 3 from the cache)
+#   surveyN     host-sim eval --set surveyN --quick, N = 2–6 (48 rigs
+#               of the Nth survey each)                          → docs/evaluation.md (~10 min each; 3 from the cache)
 #   dev-full    host-sim eval --set dev (full matrix, 522 runs)  → docs/evaluation.md (~15 min or more)
 # A block that has never been regenerated says so and names the commit its
 # figures were measured at; running its producer replaces that note.
@@ -270,18 +262,12 @@ for p in "${producers[@]}"; do
     golden) fig_golden ;;
     throughput) fig_throughput ;;
     eval) eval_block dev-quick --set dev --quick ;;
-    holdout) eval_block holdout-quick --set holdout --quick ;;
-    wide) eval_block wide-quick --set wide --quick ;;
-    survey) eval_block survey-quick --set survey --quick ;;
-    survey2) eval_block survey2-quick --set survey2 --quick ;;
-    survey3) eval_block survey3-quick --set survey3 --quick ;;
-    survey4) eval_block survey4-quick --set survey4 --quick ;;
-    survey5) eval_block survey5-quick --set survey5 --quick ;;
-    survey6) eval_block survey6-quick --set survey6 --quick ;;
+    # A `--quick` set by its `--set` name (host-sim refuses a set it lacks).
+    holdout | wide | survey | survey[2-9]) eval_block "$p-quick" --set "$p" --quick ;;
     dev-full) eval_block dev-full --set dev ;;
     size) fig_size ;;
     bench) fig_bench ;;
-    *) echo "unknown producer: $p (examples golden throughput eval size bench holdout wide survey survey2 survey3 survey4 survey5 survey6 dev-full)"; exit 2 ;;
+    *) echo "unknown producer: $p (examples golden throughput eval size bench holdout wide survey survey2 … survey6 dev-full)"; exit 2 ;;
   esac
 done
 step "done: review with git diff README.md docs/"
