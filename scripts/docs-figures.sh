@@ -267,7 +267,7 @@ for p in "${producers[@]}"; do
     dev-full) eval_block dev-full --set dev ;;
     size) fig_size ;;
     bench) fig_bench ;;
-    *) echo "unknown producer: $p (examples golden throughput eval size bench holdout wide survey survey2 … survey6 dev-full)"; exit 2 ;;
+    *) echo "unknown producer: $p (examples golden throughput eval size bench holdout wide survey survey2 … survey7 dev-full)"; exit 2 ;;
   esac
 done
 step "done: review with git diff README.md docs/"

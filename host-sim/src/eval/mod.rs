@@ -82,6 +82,12 @@ pub const SURVEY5_RIGS: [u64; 48] = consecutive(223);
 /// the others (reported separately). Disjoint from the other sets.
 pub const SURVEY6_RIGS: [u64; 48] = consecutive(271);
 
+/// Seventh survey rigs (seeds 319–366): set aside at the end of the
+/// second session of 2026-12-06 and first run, untuned, at the start of
+/// the next, before anything in it was looked at; from then on tuned on
+/// like the others (reported separately). Disjoint from the other sets.
+pub const SURVEY7_RIGS: [u64; 48] = consecutive(319);
+
 /// `N` consecutive seeds from `first`.
 const fn consecutive<const N: usize>(first: u64) -> [u64; N] {
     let mut seeds = [0; N];
@@ -115,13 +121,15 @@ pub enum RigSet {
     Survey5,
     /// [`SURVEY6_RIGS`].
     Survey6,
+    /// [`SURVEY7_RIGS`].
+    Survey7,
 }
 
 impl RigSet {
     /// Every set, in report order: development sets first, held-out last.
     /// A new set goes here too (the report, `--set` and the disjointness
     /// test read this list).
-    pub const ALL: [RigSet; 9] = [
+    pub const ALL: [RigSet; 10] = [
         Self::Dev,
         Self::Wide,
         Self::Survey,
@@ -130,6 +138,7 @@ impl RigSet {
         Self::Survey4,
         Self::Survey5,
         Self::Survey6,
+        Self::Survey7,
         Self::Holdout,
     ];
 
@@ -199,6 +208,12 @@ impl RigSet {
                 "survey6",
                 "Sixth survey development rigs",
                 "A sixth survey sample (seeds 271–318), first run untuned at the start of the second session of 2026-12-06 (use with `--quick`)",
+            ),
+            Self::Survey7 => (
+                &SURVEY7_RIGS,
+                "survey7",
+                "Seventh survey development rigs",
+                "A seventh survey sample (seeds 319–366), first run untuned at the start of the third session of 2026-12-06 (use with `--quick`)",
             ),
         };
         SetFacts {
