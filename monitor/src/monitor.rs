@@ -7,7 +7,7 @@ use crate::decision::{Decision, SampleFacts, GAIN_SETTLED_SD};
 use crate::elapsed::{elapsed, exceeds, Window};
 use crate::estimation::bank::{
     external_index, internal_index, Bank, BankOutput, HypothesisFilter, Measurement, ProcessNoise,
-    StepContext, NB, NZ,
+    StepContext, LAMINAR, NB, NZ,
 };
 use crate::estimation::consistency::NoiseMatch;
 use crate::estimation::model::{Inputs, Plant, Step, BAR, GAIN_REF, LAMINAR_REF, NX, P_REF, X_REF};
@@ -315,6 +315,7 @@ impl<T: Real> Monitor<T> {
                 u_valve,
                 laminar_factor: self.laminar_factor,
                 land: self.plant.land_leak(u_valve),
+                hold_share: self.plant.hold_share(u_valve),
                 rod: self.plant.rod_edges(u_valve),
                 // At the `both` filter's estimate: it is never reset
                 // alone for long, and any filter's is as good.
@@ -522,6 +523,12 @@ pub struct FilterState<'a, T> {
 }
 
 impl<'a, T: Real> FilterState<'a, T> {
+    /// The healthy laminar-leakage factor the filter estimates, relative
+    /// to what the temperature gives (1: as the parameters say).
+    pub fn laminar_factor(&self) -> T {
+        T::ONE + self.x[LAMINAR] * T::c(LAMINAR_REF)
+    }
+
     fn of<const N: usize>(f: &'a HypothesisFilter<T, N>) -> Self {
         Self {
             hypothesis: f.hypothesis,

@@ -14,6 +14,9 @@ pub const REGIONS: [&str; 3] = ["retracting", "holding", "extending"];
 /// `from_s` on).
 #[derive(Clone, Debug, Default)]
 pub struct Run {
+    /// The healthy filter's largest laminar-leakage factor over the
+    /// counted samples (× the temperature's; 1: the nominal).
+    pub laminar_factor_max: f64,
     /// Samples counted.
     pub counted: usize,
     /// Time counted, s.
@@ -167,6 +170,9 @@ pub fn run_pieces(
                     *m = m.max(own[k]);
                 }
             }
+        }
+        if let Some([healthy, ..]) = m.filter_states() {
+            r.laminar_factor_max = r.laminar_factor_max.max(healthy.laminar_factor());
         }
         if let (Some([.., both]), Some(region)) = (m.filter_states(), region) {
             // The leak states are in l/min at 10 bar (LEAK_UNIT).

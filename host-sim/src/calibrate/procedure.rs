@@ -3,7 +3,7 @@
 use super::fit::{self, Motion};
 use super::steps::{fit_plant, missing_motion, HeldOut};
 use super::{
-    check, noise, Calibration, CalibrationError, Mechanics, Oscillation, FLOOR_MARGIN,
+    check, noise, Calibration, CalibrationError, HoldLand, Mechanics, Oscillation, FLOOR_MARGIN,
     MAX_DETECTION_FLOOR_LPM, MAX_REFIT_GAIN_CHANGE_PCT, MAX_VALIDATION_NIS, MIN_DURATION_S,
     MIN_EVIDENCE_FRACTION, MIN_STEADY_FIT_S, MIN_STEADY_S, WARN_VALVE_MISFIT_FRACTION,
 };
@@ -17,6 +17,7 @@ pub(super) fn calibrate_with(
     samples: &[Sample],
     start: &Params,
     mechanics: Mechanics,
+    holds: HoldLand,
     oscillation: Option<&Oscillation>,
 ) -> Result<Calibration, CalibrationError> {
     start.validate().map_err(CalibrationError::Params)?;
@@ -127,7 +128,7 @@ pub(super) fn calibrate_with(
     cal.fit_s = duration - (held.t.1 - held.t.0);
 
     // 1–5 on the first two thirds, then validation on the last third.
-    let part = fit_plant(&fit_pieces, &p, true, mechanics)?;
+    let part = fit_plant(&fit_pieces, &p, true, mechanics, holds)?;
     cal.quality[0] = part.quality.clone();
     if !part.quality.problems.is_empty() {
         let why = format!(
@@ -227,7 +228,7 @@ pub(super) fn calibrate_with(
     // validated fit's.
     let mut q = p.clone();
     q.fluid.air_fraction = part.params.fluid.air_fraction;
-    let full = fit_plant(&[samples], &q, false, mechanics)?;
+    let full = fit_plant(&[samples], &q, false, mechanics, holds)?;
     cal.quality[1] = full.quality.clone();
     cal.fits = full.fits;
     // The air content is the validated fit's: its line and warning.

@@ -2,9 +2,10 @@
 
 use super::fit::{self, Growth, Motion, Quality};
 use super::{
-    check, CalibrationError, Fit, Mechanics, ALL, FIT_FRACTION, HELD_EDGE_LEAK_SCALE,
-    HELD_LAMINAR_PRIOR, HELD_Q_LAMINAR, LENIENT_VALVE_R2, LENIENT_VALVE_RESIDUAL,
-    MAX_FORCE_EXCESS_N, MAX_VALVE_RESIDUAL, MIN_REGION_EVIDENCE_S, MIN_VALVE_R2, REGIONS,
+    check, CalibrationError, Fit, HoldLand, Mechanics, ALL, FIT_FRACTION,
+    FREE_HOLD_EDGE_LEAK_SCALE, HELD_EDGE_LEAK_SCALE, HELD_LAMINAR_PRIOR, HELD_Q_LAMINAR,
+    LENIENT_VALVE_R2, LENIENT_VALVE_RESIDUAL, MAX_FORCE_EXCESS_N, MAX_VALVE_RESIDUAL,
+    MIN_REGION_EVIDENCE_S, MIN_VALVE_R2, REGIONS,
 };
 use monitor::params::HOLDING_REGION;
 use monitor::physics::units::{LEAK_UNIT, LPM_PER_M3S};
@@ -124,12 +125,14 @@ pub(super) fn fit_plant(
     start: &Params,
     search_air: bool,
     mechanics: Mechanics,
+    holds: HoldLand,
 ) -> Result<PlantFit, CalibrationError> {
     let mut p = start.clone();
     p.baseline = Default::default();
     let mut fits = Vec::new();
     let mut warnings = Vec::new();
-    laminar_factor_mode(&mut p, has_temperature(samples), &mut fits, &mut warnings);
+    let temperature = has_temperature(samples);
+    laminar_factor_mode(&mut p, temperature, holds, &mut fits, &mut warnings);
     let mut quality = Quality::default();
     let mut baseline_notes = Vec::new();
     // The regressions' samples, for the valve, the load and the holds.
@@ -313,8 +316,11 @@ pub(super) fn fit_plant(
 /// pressure gain), and this is the middle of that range.
 pub const LAND_GROWTH_PRIOR: f64 = 100.0;
 
+/// The report line on the healthy laminar-leakage factor.
+pub(super) const LAMINAR_FIT: &str = "healthy laminar leakage factor";
+
 /// Whether the recording reads the oil temperature.
-fn has_temperature(samples: &[&[Sample]]) -> bool {
+pub(super) fn has_temperature(samples: &[&[Sample]]) -> bool {
     samples
         .iter()
         .flat_map(|s| s.iter())
@@ -336,9 +342,17 @@ fn has_temperature(samples: &[&[Sample]]) -> bool {
 /// before) keep their land leakage; without a temperature reading they
 /// are set free again, with a warning. Either way the report gets one
 /// line on the factor; a free one names its cost at holds and the remedy.
+///
+/// Without a temperature the factor stays free in the moves (it stands in
+/// for the viscosity and more of the metering valve's model error), and
+/// with `holds` [`HoldLand::Held`] the holds get a land leakage of their
+/// own, held (`valve.hold_edge_leak_scale`, [`FREE_HOLD_EDGE_LEAK_SCALE`]):
+/// a leak the holding loop feeds through the covered edges is then not
+/// taken for land leakage.
 fn laminar_factor_mode(
     p: &mut Params,
     temperature: bool,
+    holds: HoldLand,
     fits: &mut Vec<Fit>,
     warnings: &mut Vec<String>,
 ) {
@@ -361,6 +375,12 @@ fn laminar_factor_mode(
         }
         _ => {}
     }
+    p.valve.hold_edge_leak_scale = match (temperature, holds) {
+        (false, HoldLand::Held) => FREE_HOLD_EDGE_LEAK_SCALE,
+        // Held by the temperature, the factor scales the land leakage
+        // everywhere.
+        _ => 0.0,
+    };
     let (value, quality) = if temperature {
         (
             format!(
@@ -369,6 +389,17 @@ fn laminar_factor_mode(
                 p.valve.edge_leak_lpm_per_bar
             ),
             "the recording reads the oil temperature: the viscosity follows it",
+        )
+    } else if holds == HoldLand::Held {
+        (
+            format!(
+                "free while the valve meters (prior {:.0} %, random walk {:.1} %/√s): no oil temperature in the recording; at holds the covered edges' land leakage is held, × {} the nominal ({:.4} l/min/bar per covered edge)",
+                100.0 * p.filter.laminar_prior,
+                100.0 * p.filter.q_laminar.sqrt(),
+                p.valve.hold_edge_leak_scale,
+                p.valve.hold_edge_leak_scale * p.valve.edge_leak_lpm_per_bar,
+            ),
+            "so a leak at a hold is not taken for land leakage; record temp_oil to have the viscosity follow the temperature in moves too",
         )
     } else {
         // Said because it costs: free, the factor takes in part of a leak
@@ -383,7 +414,7 @@ fn laminar_factor_mode(
         )
     };
     fits.push(Fit {
-        what: "healthy laminar leakage factor".into(),
+        what: LAMINAR_FIT.into(),
         value,
         quality: quality.into(),
     });
@@ -537,9 +568,18 @@ mod tests {
     /// `p` after the laminar mode step for a recording with or without
     /// the oil temperature, the warnings it gave and the report's line on
     /// the factor.
-    fn moded(mut p: Params, temperature: bool) -> (Params, Vec<String>, Fit) {
+    fn moded(p: Params, temperature: bool) -> (Params, Vec<String>, Fit) {
+        moded_holds(p, temperature, HoldLand::Free)
+    }
+
+    /// [`moded`] with the holds' land leakage as `holds` says.
+    fn moded_holds(
+        mut p: Params,
+        temperature: bool,
+        holds: HoldLand,
+    ) -> (Params, Vec<String>, Fit) {
         let (mut warnings, mut fits) = (Vec::new(), Vec::new());
-        laminar_factor_mode(&mut p, temperature, &mut fits, &mut warnings);
+        laminar_factor_mode(&mut p, temperature, holds, &mut fits, &mut warnings);
         assert_eq!(fits.len(), 1, "one line on the factor, held or free");
         (p, warnings, fits.remove(0))
     }
@@ -593,5 +633,35 @@ mod tests {
             "{}",
             held_line.value
         );
+    }
+
+    #[test]
+    fn without_a_temperature_the_holds_land_leakage_is_held_when_asked_and_said() {
+        let nominal = Params::nominal();
+        // Asked to, the holds get their own land leakage; the report names
+        // it, its size and why.
+        let (held, w, line) = moded_holds(nominal.clone(), false, HoldLand::Held);
+        assert_eq!(held.valve.hold_edge_leak_scale, FREE_HOLD_EDGE_LEAK_SCALE);
+        assert_eq!(held.filter.q_laminar, nominal.filter.q_laminar);
+        assert!(w.is_empty());
+        assert!(
+            line.value
+                .starts_with("free while the valve meters (prior 50 %"),
+            "{}",
+            line.value
+        );
+        assert!(line.value.contains("at holds"), "{}", line.value);
+        assert!(
+            line.quality.contains("not taken for land leakage"),
+            "{}",
+            line.quality
+        );
+        // Not asked to, or with a temperature (which holds the factor
+        // everywhere), they get none, whatever the start parameters had.
+        let (free, _, _) = moded_holds(held.clone(), false, HoldLand::Free);
+        assert_eq!(free.valve.hold_edge_leak_scale, 0.0);
+        let (temp, _, line) = moded_holds(held, true, HoldLand::Held);
+        assert_eq!(temp.valve.hold_edge_leak_scale, 0.0);
+        assert!(line.value.starts_with("held (prior 5 %"), "{}", line.value);
     }
 }

@@ -205,6 +205,17 @@ params_struct! {
         /// calibration from the holds; 0: no growth.
         pub edge_leak_spool_gain: f64 = 0.0,
             in (0.0 ..= 200.0, ""),
+        /// The covered edges' land leakage at a hold (spool inside the
+        /// dead zone), × `edge_leak_lpm_per_bar`, held there: the filters'
+        /// laminar state then scales the land leakage only while the
+        /// valve meters and cannot take in a leak the holding loop feeds
+        /// through those edges. Blended into the metering valve's over
+        /// `physics::valve::HOLD_BLEND_TRAVEL` of travel past the
+        /// dead zone. 0: the laminar state scales the land leakage
+        /// everywhere (as where the oil temperature holds it). Calibration
+        /// sets it where no temperature is read.
+        pub hold_edge_leak_scale: f64 = 0.0,
+            in (0.0 ..= 20.0, ""),
     }
 }
 

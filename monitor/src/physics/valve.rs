@@ -64,6 +64,22 @@ pub fn land_growth<T: Real>(y: T) -> T {
     e
 }
 
+/// Spool travel past the dead zone, fraction of travel, over which a
+/// hold's land-leakage model (`valve.hold_edge_leak_scale`) gives way to
+/// the metering valve's: half of each at this opening. A metering edge
+/// passes tens of times the land leakage there, so the blend only keeps
+/// the model continuous.
+pub const HOLD_BLEND_TRAVEL: f64 = 0.005;
+
+/// Share of a hold's land-leakage model at spool travel `open` past the
+/// dead zone (0 inside it): 1 inside the dead zone, ½ at
+/// [`HOLD_BLEND_TRAVEL`], falling as the edges open.
+#[inline]
+pub fn hold_share<T: Real>(open: T) -> T {
+    let b = T::c(HOLD_BLEND_TRAVEL);
+    b / (b + open.max(T::ZERO))
+}
+
 /// Half-width of the rounded corner of the spool opening, fraction of
 /// travel: an edge starts to meter this far before the dead zone ends.
 pub const OPENING_ROUNDING: f64 = 0.002;

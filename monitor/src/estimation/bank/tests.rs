@@ -54,6 +54,7 @@ fn at_point<T: Real>((u, s0): (f64, [f64; NX])) -> Setting<T> {
             land: plant.land_leak(T::c(u)),
             rod: plant.rod_edges(T::c(u)),
             tables: plant.tabulated(&core::array::from_fn(|i| T::c(s0[i]))),
+            hold_share: T::ZERO,
         },
         step: Step {
             dt: T::c(0.001),

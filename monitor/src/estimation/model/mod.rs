@@ -37,7 +37,9 @@ use crate::physics::fluid::BulkModulusTable;
 pub use crate::physics::friction::stribeck_decay;
 use crate::physics::load::{LoadTable, LoadTerms};
 pub use crate::physics::units::{BAR, LEAK_UNIT, LPM_PER_M3S};
-use crate::physics::valve::{land_growth, opening, orifice, spool_at, SpoolStep, OPENING_ROUNDING};
+use crate::physics::valve::{
+    hold_share, land_growth, opening, orifice, spool_at, SpoolStep, OPENING_ROUNDING,
+};
 use crate::real::Real;
 
 mod jacobian;
@@ -88,6 +90,10 @@ pub struct Inputs<T> {
     /// The load and the chambers' bulk moduli, looked up once a sample
     /// ([`Plant::tabulated`]).
     pub tables: Tabulated<T>,
+    /// Share of the hold's land-leakage model at this command
+    /// ([`Plant::hold_share`]): 0 where the laminar state scales the land
+    /// leakage everywhere.
+    pub hold_share: T,
 }
 
 /// The model's state-dependent tables, looked up once a sample at one
@@ -221,6 +227,8 @@ pub struct Plant<T> {
     /// Exponent of the land leakage's growth per unit spool travel, 1/λ.
     land_gain: T,
     k_seal: T,
+    /// `valve.hold_edge_leak_scale` (0: no hold model).
+    hold_edge_scale: T,
     lam_dp: T,
     sqrt_lam_dp: T,
     f_coulomb: T,
@@ -269,6 +277,7 @@ impl<T: Real> Plant<T> {
             },
             land_gain: T::c(v.edge_leak_spool_gain),
             k_seal: T::c(lam(params.leakage.seal_lpm_per_bar)),
+            hold_edge_scale: T::c(v.hold_edge_leak_scale),
             lam_dp: T::c(v.laminar_dp_bar * BAR),
             sqrt_lam_dp: T::c((v.laminar_dp_bar * BAR).sqrt()),
             f_coulomb: T::c(fr.coulomb_n),
@@ -284,6 +293,18 @@ impl<T: Real> Plant<T> {
     /// The discrete spool map for a step of `h` seconds.
     pub fn spool_step(&self, h: f64) -> SpoolStep<T> {
         SpoolStep::new(self.omega_f64, self.zeta_f64, h)
+    }
+
+    /// Share of the hold's land-leakage model at valve command `u_valve`
+    /// (`valve.hold_edge_leak_scale`; [`hold_share`]): 1 with the spool
+    /// the command puts inside the dead zone, falling as it opens an edge;
+    /// 0 without a hold model.
+    #[inline]
+    pub fn hold_share(&self, u_valve: T) -> T {
+        if self.hold_edge_scale <= T::ZERO {
+            return T::ZERO;
+        }
+        hold_share(self.spool_command(u_valve).abs() - self.dead_zone)
     }
 
     /// Spool command including the valve's null bias.
@@ -441,9 +462,21 @@ impl<T: Real> Plant<T> {
             zero
         };
         // Healthy laminar leakage scales with the viscosity factor, from the
-        // temperature reading and the filter's own estimate.
+        // temperature reading and the filter's own estimate; at a hold with
+        // a hold model, the edges' part is held (`valve.hold_edge_leak_scale`)
+        // and the seal's follows the temperature alone.
         let laminar = u.laminar_factor * (T::ONE + nuis.laminar * T::c(LAMINAR_REF));
-        let k_edge = self.k_edge * laminar;
+        let hold = u.hold_share;
+        let (lam_edge, lam_seal) = if hold > T::ZERO {
+            let meter = T::ONE - hold;
+            (
+                hold * u.laminar_factor * self.hold_edge_scale + meter * laminar,
+                hold * u.laminar_factor + meter * laminar,
+            )
+        } else {
+            (laminar, laminar)
+        };
+        let k_edge = self.k_edge * lam_edge;
         let gref = T::c(GAIN_REF);
         let kv_ext = self.kv_ext * (T::ONE + nuis.gain_extend * gref);
         let kv_ret = self.kv_ret * (T::ONE + nuis.gain_retract * gref);
@@ -467,7 +500,7 @@ impl<T: Real> Plant<T> {
         // --- Leaks: healthy seal leakage plus the hypothesised leaks.
         let leak_unit = T::c(LEAK_UNIT);
         let k_int_extra = leaks.internal * leak_unit;
-        let k_seal = self.k_seal * laminar;
+        let k_seal = self.k_seal * lam_seal;
         let k_int = k_seal + k_int_extra;
         let k_ext_extra = leaks.external * leak_unit;
         // The rod-side baseline is a calibration correction, not a viscous
@@ -506,10 +539,25 @@ impl<T: Real> Plant<T> {
             -(kv_ext * a_pos * dg_pa) - kv_ret * a_neg * dg_at - k_edge * (land.pa + land.at);
         let dqb_dp4 =
             -(kv_ret_b * a_neg * dg_pb) - kv_ext_b * a_pos * dg_bt - k_edge * (land.pb + land.bt);
-        // Laminar factor: d(healthy leakage)/d(state).
-        let dlam = u.laminar_factor * T::c(LAMINAR_REF) / laminar;
-        let lam_a = land_a - k_seal * dp_int;
-        let lam_b = land_b + k_seal * dp_int;
+        // Laminar factor: d(healthy leakage)/d(state), the edges' and the
+        // seal's parts each by their own factor (the same without a hold
+        // model, and as before).
+        let dlam_state = u.laminar_factor * T::c(LAMINAR_REF);
+        let (lam_a, lam_b, dlam) = if hold > T::ZERO {
+            let d = (T::ONE - hold) * dlam_state;
+            let (de, ds) = (d / lam_edge, d / lam_seal);
+            (
+                land_a * de - k_seal * dp_int * ds,
+                land_b * de + k_seal * dp_int * ds,
+                T::ONE,
+            )
+        } else {
+            (
+                land_a - k_seal * dp_int,
+                land_b + k_seal * dp_int,
+                dlam_state / laminar,
+            )
+        };
         // Gains: each direction's metering flows scale with its gain.
         let dge = self.kv_ext * gref / kv_ext;
         let dgr = self.kv_ret * gref / kv_ret;

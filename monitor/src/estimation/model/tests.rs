@@ -67,6 +67,7 @@ fn inputs(p: &Plant<f64>, u: f64) -> Inputs<f64> {
         // Mid-stroke at 20 bar; `at` looks them up where the model is
         // evaluated.
         tables: p.tabulated(&state(0.09, 0.0, 0.0, 20.0, 20.0)),
+        hold_share: p.hold_share(u),
     }
 }
 
@@ -216,6 +217,78 @@ fn tables_looked_up_nearby_and_followed_along_their_slope_are_the_model_at_the_s
                     "state {i}, looked up {dx_m} m / {dp_bar} bar away: {} vs {}",
                     followed[i],
                     own[i]
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn with_a_hold_model_the_laminar_state_moves_no_land_leakage_at_a_hold() {
+    let mut params = Params::nominal();
+    params.valve.hold_edge_leak_scale = 3.0;
+    let held = Plant::<f64>::new(&params);
+    let free = plant();
+    // Chamber pressure rates at command (= spool) `u` with laminar state `l`.
+    let rates = |p: &Plant<f64>, u: f64, l: f64| {
+        let s = state(0.09, 0.0, u, 30.0, 12.0);
+        let n = Nuisance {
+            laminar: l,
+            ..Nuisance::default()
+        };
+        let f = p.eval(&s, &at(p, &s, &inputs(p, u)), n, Leaks::default()).f;
+        [f[P3], f[P4]]
+    };
+    // At a hold the held land leakage does not follow the state; without
+    // a hold model it does, and while the valve meters it does again.
+    assert_eq!(rates(&held, 0.0, 0.0), rates(&held, 0.0, 1.0));
+    assert_ne!(rates(&free, 0.0, 0.0), rates(&free, 0.0, 1.0));
+    assert_ne!(rates(&held, 0.2, 0.0), rates(&held, 0.2, 1.0));
+    // The hold model is the nominal land leakage × 3 there (seal leakage
+    // at the temperature's factor): the same rates as a plant whose edges
+    // leak three times as much.
+    let mut triple = Params::nominal();
+    triple.valve.edge_leak_lpm_per_bar *= 3.0;
+    let triple = Plant::<f64>::new(&triple);
+    let (h, t) = (rates(&held, 0.0, 0.0), rates(&triple, 0.0, 0.0));
+    for k in 0..2 {
+        assert!(
+            (h[k] - t[k]).abs() <= 1e-9 * t[k].abs().max(1.0),
+            "{h:?} {t:?}"
+        );
+    }
+}
+
+#[test]
+fn analytic_jacobian_matches_finite_differences_with_a_hold_model() {
+    let mut params = Params::nominal();
+    params.valve.hold_edge_leak_scale = 3.0;
+    params.valve.edge_leak_skew_a = 0.3;
+    params.valve.edge_leak_spool_gain = 20.0;
+    let p = Plant::<f64>::new(&params);
+    let nuis = Nuisance {
+        gain_extend: 0.1,
+        gain_retract: -0.1,
+        laminar: 0.4,
+    };
+    let leaks = Leaks {
+        internal: 0.2,
+        external: 0.1,
+    };
+    // Inside the dead zone, where the hold model gives way, and metering.
+    for (n, u) in [0.0, 0.018, -0.02, 0.2].into_iter().enumerate() {
+        let s = state(0.08, 0.0, u, 27.0, 14.0);
+        let e = p.eval(&s, &at(&p, &s, &inputs(&p, u)), nuis, leaks);
+        let a = p.dense_jacobian(&e);
+        let fd = fd_jacobian(&p, &s, &inputs(&p, u), nuis, leaks);
+        for i in 0..NX {
+            for j in 0..NX + 5 {
+                let scale = fd[i].iter().map(|v| v.abs()).fold(1e-9, f64::max);
+                assert!(
+                    (a[i][j] - fd[i][j]).abs() < 2e-4 * scale,
+                    "case {n}: d f{i}/d s{j}: analytic {} vs fd {}",
+                    a[i][j],
+                    fd[i][j]
                 );
             }
         }
