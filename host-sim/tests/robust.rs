@@ -344,6 +344,15 @@ fn assert_warns(cal: &Calibration, what: impl Fn(&str) -> bool) {
     assert!(cal.warnings.iter().any(|w| what(w)), "{:?}", cal.warnings);
 }
 
+/// No warning of `cal` starts with `prefix`.
+fn assert_no_warning(cal: &Calibration, prefix: &str) {
+    assert!(
+        !cal.warnings.iter().any(|w| w.starts_with(prefix)),
+        "{:?}",
+        cal.warnings
+    );
+}
+
 #[test]
 fn calibration_keeps_the_laminar_leakage_bounded_where_the_model_describes_the_valve() {
     let start = Params::nominal();
@@ -357,13 +366,7 @@ fn calibration_keeps_the_laminar_leakage_bounded_where_the_model_describes_the_v
         cal.params.filter.laminar_factor_min,
         start.filter.laminar_factor_min
     );
-    assert!(
-        !cal.warnings
-            .iter()
-            .any(|w| w.starts_with("healthy laminar leakage not bounded")),
-        "{:?}",
-        cal.warnings
-    );
+    assert_no_warning(&cal, "healthy laminar leakage not bounded");
     // Development rig 4 (100 bar, 25 °C) keeps the bound too.
     let cal = calibrated(4, 100.0, 25.0);
     assert_eq!(
@@ -869,13 +872,7 @@ fn without_a_temperature_the_holds_land_leakage_is_held_unless_the_factor_runs_a
         line.value
     );
     assert!(line.quality.contains("stays ≤ ×"), "{}", line.quality);
-    assert!(
-        !cal.warnings
-            .iter()
-            .any(|w| w.starts_with("land leakage at holds not held")),
-        "{:?}",
-        cal.warnings
-    );
+    assert_no_warning(&cal, "land leakage at holds not held");
     // Development rig 1 (50 bar, 25 °C): with the holds held its factor
     // runs to × 10 in the moves (and four healthy runs alarmed in the
     // evaluation): calibrated again with the factor free at holds too,
