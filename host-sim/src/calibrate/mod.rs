@@ -162,7 +162,7 @@ pub const FREE_HOLD_EDGE_LEAK_SCALE: f64 = 3.0;
 /// moves alone: where the healthy filter's factor runs above this on the
 /// calibration recording (× the temperature's), it takes in a model error
 /// the moves do not pin down, and the holds are set free again
-/// ([`HoldLand::Free`]). Development rig 1 (× 4.5–18) alarmed falsely in
+/// (`HoldLand::Free`). Development rig 1 (× 4.5–18) alarmed falsely in
 /// healthy runs with them held; chosen on the development and survey sets
 /// (docs/calibration.md).
 pub const MAX_FREE_LAMINAR_FACTOR: f64 = 4.0;
@@ -346,6 +346,12 @@ pub struct Calibration {
 /// (`filter.laminar_factor_min`); an installation that cannot be described
 /// with that bound is calibrated without it (said first among the
 /// warnings) before it is refused.
+///
+/// Without an oil temperature the holds get a land leakage of their own
+/// (`valve.hold_edge_leak_scale`, [`FREE_HOLD_EDGE_LEAK_SCALE`]); where
+/// with it the calibration is refused, or the healthy filter's free
+/// factor runs above [`MAX_FREE_LAMINAR_FACTOR`] on the recording, it is
+/// calibrated again without (said first among the warnings).
 ///
 /// A position loop that oscillates is measured first ([`oscillation`]) and
 /// named in the report; where it oscillates most of the time a refusal
