@@ -886,3 +886,22 @@ fn without_a_temperature_the_holds_land_leakage_is_held_unless_the_factor_runs_a
         cal.warnings
     );
 }
+
+#[test]
+fn a_leak_at_the_hold_before_a_step_test_is_seen_where_the_holds_land_leakage_is_held() {
+    // Development rig 3 at 50 bar, 40 °C (no temp_oil), a 10 s step test
+    // with a 0.5 l/min external leak from the start (step at 3 s). With
+    // the land leakage at the hold scaled by the free laminar factor the
+    // factor took the leak in and the run ended `healthy`; with the holds'
+    // own land leakage held the hold before the step shows it.
+    let (rows, mut m, cal) = development_run("dev/rig3/50bar/40C/step-external-0.50");
+    assert_eq!(cal.params.valve.hold_edge_leak_scale, 3.0);
+    let st: Vec<Status> = rows.iter().map(|r| m.step(&row_sample(r))).collect();
+    let first = alarms(&st).first().copied();
+    assert!(
+        matches!(first, Some((t, Verdict::External)) if t < 3.0),
+        "{:?}",
+        alarms(&st)
+    );
+    assert_eq!(st.last().unwrap().verdict, Verdict::External);
+}
