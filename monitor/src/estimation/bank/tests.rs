@@ -22,6 +22,15 @@ struct Setting<T: Real> {
     s0: [T; NX],
 }
 
+impl<T: Real> Setting<T> {
+    /// Look the model's tables up where filter `f` puts the plant, as
+    /// the monitor does once a sample.
+    fn tables_at<const N: usize>(&mut self, f: &HypothesisFilter<T, N>) {
+        let at: [T; NX] = core::array::from_fn(|i| f.ekf.x[i]);
+        self.ctx.inputs.tables = self.plant.tabulated(&at);
+    }
+}
+
 /// Operating points: valve command and scaled plant state
 /// `[x_p, ẋ_p, x_v, ẋ_v, p3, p4]`.
 const POINTS: [(f64, [f64; NX]); 5] = [
@@ -295,9 +304,7 @@ fn filter_matches_dense<T: Real, const N: usize>(h: Hypothesis, tol_x: f64, tol_
         let mut fast = HypothesisFilter::<T, N>::new(h, &s.s0, &p0, T::c(0.1));
         let mut slow = fast.clone();
         for _ in 0..500 {
-            // The tables where the plant is, as the monitor looks them up.
-            let at: [T; NX] = core::array::from_fn(|i| slow.ekf.x[i]);
-            s.ctx.inputs.tables = s.plant.tabulated(&at);
+            s.tables_at(&slow);
             step(&mut fast, &s).expect("a healthy filter step");
             dense_step(&mut slow, &s);
         }
@@ -358,8 +365,7 @@ fn healthy_laminar_leakage_never_estimated_below_its_floor() {
     f.ekf.x[LAMINAR] = -0.45;
     let mut lowest = f64::INFINITY;
     for _ in 0..2000 {
-        let at: [f64; NX] = core::array::from_fn(|i| f.ekf.x[i]);
-        s.ctx.inputs.tables = s.plant.tabulated(&at);
+        s.tables_at(&f);
         let x = &f.ekf.x;
         let m = Measurement {
             z: [x[XP], x[P3] + 2e-3, x[P4] - 2e-3],
