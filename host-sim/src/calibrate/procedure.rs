@@ -290,6 +290,7 @@ pub(super) fn calibrate_with(
     let after = check::run(samples, &full.params)?;
     cal.nis_after = after.healthy_nis;
     cal.leak_after_lpm = after.detect_max_lpm;
+    cal.laminar_factor_max = after.laminar_factor_max;
     cal.params = full.params;
     // The detection floor: what this leak-free installation still reads,
     // with a margin, wherever it exceeds the user's alarm level.
