@@ -156,8 +156,9 @@ pub const HELD_EDGE_LEAK_SCALE: f64 = 3.0;
 /// (`valve.hold_edge_leak_scale`), so that the factor cannot take in a
 /// leak the holding loop feeds. × 3 as [`HELD_EDGE_LEAK_SCALE`]: × 1
 /// gained less on the development sets, and calibration's choice among
-/// × 1–5 by the healthy filter's NIS (mostly × 1) no more.
-pub const FREE_HOLD_EDGE_LEAK_SCALE: f64 = 3.0;
+/// × 1–5 by the healthy filter's NIS (mostly × 1) no more. The golden
+/// cases use it too.
+pub const FREE_HOLD_EDGE_LEAK_SCALE: f64 = monitor::physics::valve::HOLD_EDGE_LEAK_SCALE;
 /// With the holds' land leakage held, the free factor is anchored by the
 /// moves alone: where the healthy filter's factor runs above this on the
 /// calibration recording (× the temperature's), it takes in a model error

@@ -71,6 +71,11 @@ pub fn land_growth<T: Real>(y: T) -> T {
 /// the model continuous.
 pub const HOLD_BLEND_TRAVEL: f64 = 0.005;
 
+/// The hold's land leakage calibration sets where no oil temperature is
+/// read (`valve.hold_edge_leak_scale`), × the nominal per covered edge:
+/// the same × 3 as where the temperature holds the factor.
+pub const HOLD_EDGE_LEAK_SCALE: f64 = 3.0;
+
 /// Share of a hold's land-leakage model at spool travel `open` past the
 /// dead zone (0 inside it): 1 inside the dead zone, ½ at
 /// [`HOLD_BLEND_TRAVEL`], falling as the edges open.
