@@ -131,8 +131,13 @@ pub(super) fn fit_plant(
     p.baseline = Default::default();
     let mut fits = Vec::new();
     let mut warnings = Vec::new();
-    let temperature = has_temperature(samples);
-    laminar_factor_mode(&mut p, temperature, holds, &mut fits, &mut warnings);
+    laminar_factor_mode(
+        &mut p,
+        has_temperature(samples),
+        holds,
+        &mut fits,
+        &mut warnings,
+    );
     let mut quality = Quality::default();
     let mut baseline_notes = Vec::new();
     // The regressions' samples, for the valve, the load and the holds.
