@@ -88,6 +88,12 @@ pub const SURVEY6_RIGS: [u64; 48] = consecutive(271);
 /// like the others (reported separately). Disjoint from the other sets.
 pub const SURVEY7_RIGS: [u64; 48] = consecutive(319);
 
+/// Eighth survey rigs (seeds 367–414): set aside at the end of the third
+/// session of 2026-12-06 and first run, untuned, at the start of the
+/// next, before anything in it was looked at; from then on tuned on like
+/// the others (reported separately). Disjoint from the other sets.
+pub const SURVEY8_RIGS: [u64; 48] = consecutive(367);
+
 /// `N` consecutive seeds from `first`.
 const fn consecutive<const N: usize>(first: u64) -> [u64; N] {
     let mut seeds = [0; N];
@@ -123,13 +129,15 @@ pub enum RigSet {
     Survey6,
     /// [`SURVEY7_RIGS`].
     Survey7,
+    /// [`SURVEY8_RIGS`].
+    Survey8,
 }
 
 impl RigSet {
     /// Every set, in report order: development sets first, held-out last.
     /// A new set goes here too (the report, `--set` and the disjointness
     /// test read this list).
-    pub const ALL: [RigSet; 10] = [
+    pub const ALL: [RigSet; 11] = [
         Self::Dev,
         Self::Wide,
         Self::Survey,
@@ -139,6 +147,7 @@ impl RigSet {
         Self::Survey5,
         Self::Survey6,
         Self::Survey7,
+        Self::Survey8,
         Self::Holdout,
     ];
 
@@ -214,6 +223,12 @@ impl RigSet {
                 "survey7",
                 "Seventh survey development rigs",
                 "A seventh survey sample (seeds 319–366), first run untuned at the start of the third session of 2026-12-06 (use with `--quick`)",
+            ),
+            Self::Survey8 => (
+                &SURVEY8_RIGS,
+                "survey8",
+                "Eighth survey development rigs",
+                "An eighth survey sample (seeds 367–414), first run untuned at the start of the fourth session of 2026-12-06 (use with `--quick`)",
             ),
         };
         SetFacts {
