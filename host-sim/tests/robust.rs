@@ -213,6 +213,36 @@ fn an_open_valve_command_wire_during_slow_moves_is_a_sensor_fault_never_a_leak()
 }
 
 #[test]
+fn an_open_valve_command_wire_at_a_hold_is_a_sensor_fault_never_a_leak() {
+    // Seventh survey rig 344, 50 bar, 40 °C: the wire opens at 20 s while
+    // the loop holds the piston with a steady 0.010; nothing moves until
+    // the next move, 2.4 s later. The reading's drop to 0 was taken for
+    // an external leak 0.9 s after the wire opened; the command that
+    // jumped to 0 and sits still is no evidence now.
+    let config = PlanConfig {
+        sets: vec![RigSet::Survey7],
+        rigs: Some(26),
+        quick: true,
+        ..PlanConfig::default()
+    };
+    let (rows, mut m, _) = planned_run(&config, "survey7/rig344/50bar/40C/fault-open-wire-u_valve");
+    let at = |t: f64| rows.iter().find(|r| r.t >= t).expect("a row");
+    let held_before = at(19.9).u_valve.expect("a command");
+    assert!(
+        (0.005..0.02).contains(&held_before),
+        "not a hold with a small opening: {held_before}"
+    );
+    assert!(
+        (at(22.0).truth.x_m - at(20.0).truth.x_m).abs() < 1e-3,
+        "the piston moves"
+    );
+    let st: Vec<Status> = rows.iter().map(|r| m.step(&row_sample(r))).collect();
+    assert!(alarms(&st).is_empty(), "{:?}", alarms(&st));
+    assert!(st.iter().all(|s| !s.verdict.is_leak()));
+    assert_eq!(st.last().unwrap().verdict, Verdict::SensorFault);
+}
+
+#[test]
 fn stuck_or_nan_time_is_inconclusive_never_healthy() {
     for fault in [
         Fault::StuckTime {

@@ -39,6 +39,17 @@
 //! this piston 3 mm in 0.6 s: the price is that such drift with a
 //! constant zero command reads as a sensor fault, never as a leak from an
 //! untrusted command).
+//!
+//! **A command that drops dead at a hold.** When the wire opens while the
+//! loop holds the piston, nothing moves until the next move: the reading
+//! says 0 where the controller drives a small opening, and the filters
+//! take the difference for a leak within a second or two. A live command
+//! that settles near zero gets there smoothly; a dead input's reading
+//! jumps there (by more than [`STILL_JUMP`] in one sample) and then does
+//! not change at all. Such a command is contradicted from
+//! [`STILL_DEAD_S`] after the jump until it changes again: no evidence,
+//! but no fault (a machine that commands exactly 0 at rest looks the
+//! same until it moves).
 
 use crate::physics::valve::spool_at;
 use crate::real::Real;
@@ -95,6 +106,15 @@ pub const STILL_SUSPECT_M: f32 = 1.5e-3;
 /// healthy development runs travel at most 0.9 mm with the command inside
 /// the dead zone).
 pub const STILL_FAULT_M: f32 = 3.0e-3;
+/// A step into [`STILL_BAND`] larger than this in one sample is how a dead
+/// input's reading arrives (four quanta of a 12-bit input over ±1; a
+/// live loop's command moves by less from sample to sample as it settles).
+/// The open command wires of the survey rigs stepped by 0.002–0.3.
+pub const STILL_JUMP: f32 = 2.0e-3;
+/// How long a command that jumped into the band must sit still before it
+/// is contradicted, s (no live command of the survey rigs sat still for
+/// 0.25 s after such a jump; an open wire's leak alarm took ≥ 0.9 s).
+pub const STILL_DEAD_S: f32 = 0.05;
 
 /// Verdict on one position reading.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -202,6 +222,10 @@ pub struct CommandAgreement {
     /// it took that value, m.
     still_u: f32,
     still_x_m: f32,
+    /// The still command jumped into the band, and how long it has sat
+    /// still since, s.
+    still_jumped: bool,
+    still_s: f32,
 }
 
 impl CommandAgreement {
@@ -218,6 +242,8 @@ impl CommandAgreement {
             faulted: false,
             still_u: f32::NAN,
             still_x_m: 0.0,
+            still_jumped: false,
+            still_s: 0.0,
         }
     }
 
@@ -254,12 +280,17 @@ impl CommandAgreement {
         let xs = self.x_smooth.unwrap_or(x_m);
         let still = (u - self.still_u).abs() <= STILL_TOL;
         if u.abs() > STILL_BAND || !still {
+            self.still_jumped = u.abs() <= STILL_BAND && (u - self.still_u).abs() > STILL_JUMP;
+            self.still_s = 0.0;
             self.still_u = u;
             self.still_x_m = xs;
+        } else {
+            self.still_s = Real::min(self.still_s + dt_s, STILL_DEAD_S);
         }
         let travel = (xs - self.still_x_m).abs();
         let drifting = travel > STILL_SUSPECT_M;
-        let contradicted = closed || against || drifting;
+        let dropped_dead = self.still_jumped && self.still_s >= STILL_DEAD_S;
+        let contradicted = closed || against || drifting || dropped_dead;
         if (settled && (closed || against)) || drifting {
             self.contradiction_s = Real::min(self.contradiction_s + dt_s, COMMAND_MEMORY_S);
         } else if !contradicted {
@@ -282,6 +313,7 @@ impl CommandAgreement {
         self.speed = 0.0;
         self.region_s = 0.0;
         self.still_u = f32::NAN;
+        self.still_jumped = false;
     }
 }
 
@@ -441,6 +473,57 @@ mod tests {
         for k in 0..2_000 {
             let t = k as f32 * 1e-3;
             let r = c.check(0.05 + 0.01 * t, 0.009, 1e-3);
+            assert!(!r.contradicted && !r.faulted, "{k}");
+        }
+    }
+
+    #[test]
+    fn a_command_wire_that_opens_at_a_hold_is_no_evidence_until_the_command_moves() {
+        // The loop holds the piston with a steady 0.008 (a controller fed
+        // a clean position); at 1 s the wire opens and the reading drops
+        // to 0; nothing moves. At 3 s the command is live again.
+        let mut c = CommandAgreement::new(0.015, 0.0);
+        let mut contradicted_at = None;
+        for k in 0..4_000 {
+            let t = k as f32 * 1e-3;
+            let u = match k {
+                0..1_000 => 0.008,
+                1_000..3_000 => 0.0,
+                _ => 0.004 + 1e-4 * (t * 7.0).sin(),
+            };
+            let r = c.check(0.08, u, 1e-3);
+            assert!(!r.faulted, "{k}");
+            if !(1_000..3_001).contains(&k) {
+                assert!(!r.contradicted, "{k}");
+            }
+            if r.contradicted && contradicted_at.is_none() {
+                contradicted_at = Some(k);
+            }
+            if (1_060..3_000).contains(&k) {
+                assert!(r.contradicted, "{k}");
+            }
+        }
+        assert!(
+            contradicted_at.is_some_and(|k| k >= 1_049),
+            "{contradicted_at:?}"
+        );
+    }
+
+    #[test]
+    fn a_command_that_settles_into_the_band_is_not_contradicted() {
+        // At the end of a move the loop's command decays to a steady
+        // 0.002 (50 ms time constant) and then holds it to the last digit
+        // for seconds; and a command that steps by one 12-bit quantum
+        // (4.9e-4) inside the band and sits there is no dead input either.
+        let mut c = CommandAgreement::new(0.015, 0.0);
+        for k in 0..6_000 {
+            let t = k as f32 * 1e-3;
+            let u = if k < 4_000 {
+                0.002 + 0.3 * (-t / 0.05).exp()
+            } else {
+                0.002 - 4.9e-4
+            };
+            let r = c.check(0.08, u, 1e-3);
             assert!(!r.contradicted && !r.faulted, "{k}");
         }
     }
