@@ -307,6 +307,25 @@ mod tests {
     }
 
     #[test]
+    fn a_noisy_tank_reading_is_no_fault_but_a_broken_loop_is() {
+        // A 400 bar NE43 transmitter on the tank line: 0.3 bar with 0.7 bar
+        // of noise, clamped at its lowest measurement, 3.8 mA = −5 bar.
+        // No calibration widened the range (a provisional set).
+        let mut c = SampleChecker::new(&Params::nominal());
+        let mut ev = Events::new();
+        let mut rng = crate::testutil::Lcg::new(17);
+        let mut s = good();
+        for _ in 0..100_000 {
+            let p = (0.3 + 0.7 * rng.gaussian() as f32).max(-5.0);
+            s.p_tank_bar = Some(p);
+            assert_eq!(c.check(&s, 1e-3, &mut ev).faulted, 0, "{p} bar");
+        }
+        // 3.6 mA, a broken loop, on a 250 bar transmitter.
+        s.p_tank_bar = Some(-6.25);
+        assert_eq!(c.check(&s, 1e-3, &mut ev).faulted, Channel::PTank.bit());
+    }
+
+    #[test]
     fn a_bad_temperature_is_reported_but_not_blocking() {
         let mut c = SampleChecker::new(&Params::nominal());
         let mut ev = Events::new();

@@ -364,7 +364,12 @@ params_struct! {
         pub position_offset_m: f64 = 0.0,
             in (-10.0 ..= 10.0, "m"),
         /// Plausible pressure range, bar: readings outside are sensor faults.
-        pub pressure_range_bar: [f64; 2] = [-2.0, 400.0],
+        /// The lower limit is the lowest reading a 400 bar NAMUR NE43
+        /// transmitter still gives as a measurement (3.8 mA): a tank
+        /// reading's noise about 0 bar reaches there on a valid signal
+        /// (−2 bar faulted noisy tank transmitters of uncalibrated survey
+        /// rigs); a broken loop (≤ 3.6 mA) reads −6 bar or lower.
+        pub pressure_range_bar: [f64; 2] = [-5.0, 400.0],
             in [(-200.0 ..= 0.0, "bar"), (10.0 ..= 1000.0, "bar")],
         /// Plausible position range beyond the stroke ends, m.
         pub position_margin_m: f64 = 0.01,
