@@ -151,14 +151,6 @@ pub const HELD_LAMINAR_PRIOR: f64 = 0.05;
 /// nominal (the thesis' value for a centred spool): chosen among × 1–3 on
 /// the development and further rigs; calibration cannot measure it yet.
 pub const HELD_EDGE_LEAK_SCALE: f64 = 3.0;
-/// Where the factor stays free (no oil temperature): the covered edges'
-/// land leakage at a hold, × the nominal, held there
-/// (`valve.hold_edge_leak_scale`), so that the factor cannot take in a
-/// leak the holding loop feeds. × 3 as [`HELD_EDGE_LEAK_SCALE`]: × 1
-/// gained less on the development sets, and calibration's choice among
-/// × 1–5 by the healthy filter's NIS (mostly × 1) no more. The golden
-/// cases use it too.
-pub const FREE_HOLD_EDGE_LEAK_SCALE: f64 = monitor::physics::valve::HOLD_EDGE_LEAK_SCALE;
 /// With the holds' land leakage held, the free factor is anchored by the
 /// moves alone: where the healthy filter's factor runs above this on the
 /// calibration recording (× the temperature's), it takes in a model error
@@ -352,7 +344,7 @@ pub struct Calibration {
 /// warnings) before it is refused.
 ///
 /// Without an oil temperature the holds get a land leakage of their own
-/// (`valve.hold_edge_leak_scale`, [`FREE_HOLD_EDGE_LEAK_SCALE`]); where
+/// (`valve.hold_edge_leak_scale`, [`HOLD_EDGE_LEAK_SCALE`](monitor::physics::valve::HOLD_EDGE_LEAK_SCALE)); where
 /// with it the calibration is refused, or the healthy filter's free
 /// factor runs above [`MAX_FREE_LAMINAR_FACTOR`] on the recording, it is
 /// calibrated again without (said first among the warnings).
@@ -483,7 +475,7 @@ fn calibrate_mechanics(
 /// holds.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum HoldLand {
-    /// Held there, × [`FREE_HOLD_EDGE_LEAK_SCALE`] the nominal; the
+    /// Held there, × [`HOLD_EDGE_LEAK_SCALE`](monitor::physics::valve::HOLD_EDGE_LEAK_SCALE) the nominal; the
     /// laminar factor free in the moves alone.
     Held,
     /// Scaled by the free laminar factor there too (where with them held

@@ -2,13 +2,13 @@
 
 use super::fit::{self, Growth, Motion, Quality};
 use super::{
-    check, CalibrationError, Fit, HoldLand, Mechanics, ALL, FIT_FRACTION,
-    FREE_HOLD_EDGE_LEAK_SCALE, HELD_EDGE_LEAK_SCALE, HELD_LAMINAR_PRIOR, HELD_Q_LAMINAR,
-    LENIENT_VALVE_R2, LENIENT_VALVE_RESIDUAL, MAX_FORCE_EXCESS_N, MAX_VALVE_RESIDUAL,
-    MIN_REGION_EVIDENCE_S, MIN_VALVE_R2, REGIONS,
+    check, CalibrationError, Fit, HoldLand, Mechanics, ALL, FIT_FRACTION, HELD_EDGE_LEAK_SCALE,
+    HELD_LAMINAR_PRIOR, HELD_Q_LAMINAR, LENIENT_VALVE_R2, LENIENT_VALVE_RESIDUAL,
+    MAX_FORCE_EXCESS_N, MAX_VALVE_RESIDUAL, MIN_REGION_EVIDENCE_S, MIN_VALVE_R2, REGIONS,
 };
 use monitor::params::HOLDING_REGION;
 use monitor::physics::units::{LEAK_UNIT, LPM_PER_M3S};
+use monitor::physics::valve::HOLD_EDGE_LEAK_SCALE;
 use monitor::{Params, Sample};
 
 /// One run of fit steps 1–5 on (part of) a recording.
@@ -351,7 +351,7 @@ pub(super) fn has_temperature(samples: &[&[Sample]]) -> bool {
 /// Without a temperature the factor stays free in the moves (it stands in
 /// for the viscosity and more of the metering valve's model error), and
 /// with `holds` [`HoldLand::Held`] the holds get a land leakage of their
-/// own, held (`valve.hold_edge_leak_scale`, [`FREE_HOLD_EDGE_LEAK_SCALE`]):
+/// own, held (`valve.hold_edge_leak_scale`, [`HOLD_EDGE_LEAK_SCALE`]):
 /// a leak the holding loop feeds through the covered edges is then not
 /// taken for land leakage.
 fn laminar_factor_mode(
@@ -381,7 +381,7 @@ fn laminar_factor_mode(
         _ => {}
     }
     p.valve.hold_edge_leak_scale = match (temperature, holds) {
-        (false, HoldLand::Held) => FREE_HOLD_EDGE_LEAK_SCALE,
+        (false, HoldLand::Held) => HOLD_EDGE_LEAK_SCALE,
         // Held by the temperature, the factor scales the land leakage
         // everywhere.
         _ => 0.0,
@@ -646,7 +646,7 @@ mod tests {
         // Asked to, the holds get their own land leakage; the report names
         // it, its size and why.
         let (held, w, line) = moded_holds(nominal.clone(), false, HoldLand::Held);
-        assert_eq!(held.valve.hold_edge_leak_scale, FREE_HOLD_EDGE_LEAK_SCALE);
+        assert_eq!(held.valve.hold_edge_leak_scale, HOLD_EDGE_LEAK_SCALE);
         assert_eq!(held.filter.q_laminar, nominal.filter.q_laminar);
         assert!(w.is_empty());
         assert!(

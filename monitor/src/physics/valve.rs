@@ -72,8 +72,12 @@ pub fn land_growth<T: Real>(y: T) -> T {
 pub const HOLD_BLEND_TRAVEL: f64 = 0.005;
 
 /// The hold's land leakage calibration sets where no oil temperature is
-/// read (`valve.hold_edge_leak_scale`), × the nominal per covered edge:
-/// the same × 3 as where the temperature holds the factor.
+/// read (`valve.hold_edge_leak_scale`), × the nominal per covered edge,
+/// so that the free laminar factor cannot take in a leak the holding
+/// loop feeds: the same × 3 as where the temperature holds the factor
+/// (× 1 gained less on the development sets, and calibration's choice
+/// among × 1–5 by the healthy filter's NIS, mostly × 1, no more). The
+/// golden cases use it too.
 pub const HOLD_EDGE_LEAK_SCALE: f64 = 3.0;
 
 /// Share of a hold's land-leakage model at spool travel `open` past the
