@@ -94,6 +94,12 @@ pub const SURVEY7_RIGS: [u64; 48] = consecutive(319);
 /// the others (reported separately). Disjoint from the other sets.
 pub const SURVEY8_RIGS: [u64; 48] = consecutive(367);
 
+/// Ninth survey rigs (seeds 415–462): set aside at the end of the fourth
+/// session of 2026-12-06 and first run, untuned, at the start of the
+/// next, before anything in it was looked at; from then on tuned on like
+/// the others (reported separately). Disjoint from the other sets.
+pub const SURVEY9_RIGS: [u64; 48] = consecutive(415);
+
 /// `N` consecutive seeds from `first`.
 const fn consecutive<const N: usize>(first: u64) -> [u64; N] {
     let mut seeds = [0; N];
@@ -131,13 +137,15 @@ pub enum RigSet {
     Survey7,
     /// [`SURVEY8_RIGS`].
     Survey8,
+    /// [`SURVEY9_RIGS`].
+    Survey9,
 }
 
 impl RigSet {
     /// Every set, in report order: development sets first, held-out last.
     /// A new set goes here too (the report, `--set` and the disjointness
     /// test read this list).
-    pub const ALL: [RigSet; 11] = [
+    pub const ALL: [RigSet; 12] = [
         Self::Dev,
         Self::Wide,
         Self::Survey,
@@ -148,6 +156,7 @@ impl RigSet {
         Self::Survey6,
         Self::Survey7,
         Self::Survey8,
+        Self::Survey9,
         Self::Holdout,
     ];
 
@@ -229,6 +238,12 @@ impl RigSet {
                 "survey8",
                 "Eighth survey development rigs",
                 "An eighth survey sample (seeds 367–414), first run untuned at the start of the fourth session of 2026-12-06 (use with `--quick`)",
+            ),
+            Self::Survey9 => (
+                &SURVEY9_RIGS,
+                "survey9",
+                "Ninth survey development rigs",
+                "A ninth survey sample (seeds 415–462), first run untuned at the start of the fifth session of 2026-12-06 (use with `--quick`)",
             ),
         };
         SetFacts {
