@@ -11,6 +11,7 @@ use host_sim::calibrate::{calibrate, Calibration};
 use host_sim::eval::exec::row_sample;
 use host_sim::eval::plan::{plan, PlanConfig};
 use host_sim::eval::RigSet;
+use monitor::physics::valve::HOLD_EDGE_LEAK_SCALE;
 use monitor::status::health;
 use monitor::{Event, Monitor, Params, Status, Verdict};
 use plant::{Channel, Fault, Leak, RigSpec, Run, Scenario};
@@ -889,7 +890,7 @@ fn without_a_temperature_the_holds_land_leakage_is_held_unless_the_factor_runs_a
     // the holds keep a land leakage of their own (× 3 the nominal), and
     // the report says so with the largest factor seen.
     let cal = calibrated(3, 50.0, 25.0);
-    assert_eq!(cal.params.valve.hold_edge_leak_scale, 3.0);
+    assert_eq!(cal.params.valve.hold_edge_leak_scale, HOLD_EDGE_LEAK_SCALE);
     let line = cal
         .fits
         .iter()
@@ -925,7 +926,7 @@ fn a_leak_at_the_hold_before_a_step_test_is_seen_where_the_holds_land_leakage_is
     // factor took the leak in and the run ended `healthy`; with the holds'
     // own land leakage held the hold before the step shows it.
     let (rows, mut m, cal) = development_run("dev/rig3/50bar/40C/step-external-0.50");
-    assert_eq!(cal.params.valve.hold_edge_leak_scale, 3.0);
+    assert_eq!(cal.params.valve.hold_edge_leak_scale, HOLD_EDGE_LEAK_SCALE);
     let st: Vec<Status> = rows.iter().map(|r| m.step(&row_sample(r))).collect();
     let first = alarms(&st).first().copied();
     assert!(
