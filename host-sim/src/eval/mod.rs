@@ -100,6 +100,12 @@ pub const SURVEY8_RIGS: [u64; 48] = consecutive(367);
 /// the others (reported separately). Disjoint from the other sets.
 pub const SURVEY9_RIGS: [u64; 48] = consecutive(415);
 
+/// Tenth survey rigs (seeds 463–510): set aside at the end of the fifth
+/// session of 2026-12-06 and first run, untuned, at the start of the
+/// next, before anything in it was looked at; from then on tuned on like
+/// the others (reported separately). Disjoint from the other sets.
+pub const SURVEY10_RIGS: [u64; 48] = consecutive(463);
+
 /// `N` consecutive seeds from `first`.
 const fn consecutive<const N: usize>(first: u64) -> [u64; N] {
     let mut seeds = [0; N];
@@ -139,13 +145,15 @@ pub enum RigSet {
     Survey8,
     /// [`SURVEY9_RIGS`].
     Survey9,
+    /// [`SURVEY10_RIGS`].
+    Survey10,
 }
 
 impl RigSet {
     /// Every set, in report order: development sets first, held-out last.
     /// A new set goes here too (the report, `--set` and the disjointness
     /// test read this list).
-    pub const ALL: [RigSet; 12] = [
+    pub const ALL: [RigSet; 13] = [
         Self::Dev,
         Self::Wide,
         Self::Survey,
@@ -157,6 +165,7 @@ impl RigSet {
         Self::Survey7,
         Self::Survey8,
         Self::Survey9,
+        Self::Survey10,
         Self::Holdout,
     ];
 
@@ -244,6 +253,12 @@ impl RigSet {
                 "survey9",
                 "Ninth survey development rigs",
                 "A ninth survey sample (seeds 415–462), first run untuned at the start of the fifth session of 2026-12-06 (use with `--quick`)",
+            ),
+            Self::Survey10 => (
+                &SURVEY10_RIGS,
+                "survey10",
+                "Tenth survey development rigs",
+                "A tenth survey sample (seeds 463–510), first run untuned at the start of the sixth session of 2026-12-06 (use with `--quick`)",
             ),
         };
         SetFacts {
