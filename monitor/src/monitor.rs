@@ -386,6 +386,7 @@ impl<T: Real> Monitor<T> {
             region,
             t_s: sample.t_s,
             valve_gains_learned: bank.valve_gains_learned(GAIN_SETTLED_SD),
+            u_valve,
         };
         flags |= self.decision.update(&ok, facts, &mut events);
         self.status(sample.t_s, checked.faulted, flags, events)

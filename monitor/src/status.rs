@@ -134,10 +134,18 @@ pub mod health {
     /// within it): the sample was no evidence (`EVIDENCE_PAUSED` is set
     /// too). Persistent: recalibrate, or check the valve.
     pub const VALVE_MISFIT: u16 = 1 << 14;
+    /// At quiet holds the loop holds the piston with a valve command
+    /// beyond `baseline.hold_command_tolerance` of the leak-free
+    /// installation's (`baseline.hold_command`) for more than
+    /// `decision::HOLD_SHIFT_S` of evidence: some flow the installation
+    /// did not have is fed through the valve — a leak the filters may not
+    /// name, or a valve whose null moved. Never `healthy` while it lasts
+    /// (the verdict is `inconclusive` unless a leak is latched).
+    pub const HOLD_COMMAND_SHIFTED: u16 = 1 << 15;
 
     /// Every flag above with its name (as the CAN decoder and logs show
     /// it), in bit order. A new flag goes here too.
-    pub const NAMES: [(u16, &str); 15] = [
+    pub const NAMES: [(u16, &str); 16] = [
         (WARMING_UP, "WARMING_UP"),
         (EVIDENCE_PAUSED, "EVIDENCE_PAUSED"),
         (DATA_GAP, "DATA_GAP"),
@@ -153,6 +161,7 @@ pub mod health {
         (PROVISIONAL, "PROVISIONAL"),
         (LOOP_OSCILLATING, "LOOP_OSCILLATING"),
         (VALVE_MISFIT, "VALVE_MISFIT"),
+        (HOLD_COMMAND_SHIFTED, "HOLD_COMMAND_SHIFTED"),
     ];
 }
 
@@ -258,6 +267,13 @@ impl Status {
     /// `decision`): this is the decision's own judgement, not the gains'.
     pub fn valve_model_misfit(&self) -> bool {
         self.health & health::VALVE_MISFIT != 0
+    }
+
+    /// The loop holds the piston with a command away from the leak-free
+    /// installation's (`health::HOLD_COMMAND_SHIFTED`): `healthy` is
+    /// withheld.
+    pub fn hold_command_shifted(&self) -> bool {
+        self.health & health::HOLD_COMMAND_SHIFTED != 0
     }
 
     /// The alarm levels in use (internal, external), each with the leak

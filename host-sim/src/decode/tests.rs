@@ -87,7 +87,10 @@ fn health_and_faulted_channels_by_name() {
     );
     assert_eq!(describe(&s("Health", 1 << 13)), "Health=LOOP_OSCILLATING");
     assert_eq!(describe(&s("Health", 1 << 14)), "Health=VALVE_MISFIT");
-    assert_eq!(describe(&s("Health", 1 << 15)), "Health=BIT15");
+    assert_eq!(
+        describe(&s("Health", 1 << 15)),
+        "Health=HOLD_COMMAND_SHIFTED"
+    );
     assert_eq!(
         describe(&s("FaultedChannels", 0b110)),
         "FaultedChannels=p_piston|p_rod"

@@ -153,6 +153,11 @@ pub const GAIN_SETTLED_SD: f64 = 0.01;
 /// `EVIDENCE_PAUSED`: the plant is not quasi-steady enough for it to count
 /// for much.
 pub const PAUSED_WEIGHT: f64 = 0.5;
+/// Averaging time of the valve command at quiet holds, s of evidence.
+pub const HOLD_AVG_S: f64 = 1.0;
+/// Evidence time the holding command must stand beyond its tolerance
+/// before `healthy` is withheld, s (`health::HOLD_COMMAND_SHIFTED`).
+pub const HOLD_SHIFT_S: f64 = 1.0;
 
 /// What the decision is told of one sample besides the filters' outputs.
 #[derive(Clone, Copy, Debug)]
@@ -178,6 +183,9 @@ pub struct SampleFacts<T> {
     /// The `both` filter has learned its valve flow gains (extend,
     /// retract) to 1σ below [`GAIN_SETTLED_SD`].
     pub valve_gains_learned: [bool; 2],
+    /// Valve command as read (held over a rejected reading), normalised
+    /// −1 … 1.
+    pub u_valve: T,
 }
 
 /// Decision state.
@@ -198,6 +206,14 @@ pub struct Decision<T> {
     slow_sd: PerLeak<T>,
     /// CUSUM per leak, s of evidence time.
     persist: PerLeak<T>,
+    /// The leak-free installation's holding command and how far it may
+    /// move (normalised; tolerance 0: not followed).
+    hold_ref: T,
+    hold_tol: T,
+    /// Average command at quiet holds (`None` before the first).
+    hold_avg: Option<T>,
+    /// CUSUM of that average's excess over the tolerance, s of evidence.
+    hold_shift_s: T,
     /// Leaks whose CUSUM reached the debounce time since the last
     /// (re)start or acknowledgement.
     raised: PerLeak<bool>,
@@ -317,6 +333,10 @@ impl<T: Real> Decision<T> {
             warning_lpm: floor
                 .map(|f| f.map(|f| T::c(a.warning_lpm * a.alarm_lpm.max(f) / a.alarm_lpm))),
             debounce_s: T::c(params.alarm.debounce_s),
+            hold_ref: T::c(params.baseline.hold_command),
+            hold_tol: T::c(params.baseline.hold_command_tolerance),
+            hold_avg: None,
+            hold_shift_s: T::ZERO,
             min_probability: T::c(params.alarm.min_probability),
             baseline: PerLeak::new(
                 params.baseline.internal_lpm_per_10bar.map(T::c),
@@ -363,6 +383,8 @@ impl<T: Real> Decision<T> {
         self.gain_settled = [false; 2];
         self.recent_weight = T::ZERO;
         self.recent_time = T::ZERO;
+        self.hold_avg = None;
+        self.hold_shift_s = T::ZERO;
     }
 
     /// Has the monitor evaluated enough valid evidence to claim healthy?
@@ -375,6 +397,38 @@ impl<T: Real> Decision<T> {
             && !self.provisional
             && !self.pending()
             && !self.reports_a_leak()
+            && !self.hold_shifted()
+    }
+
+    /// Does the loop hold the piston at a command away from the leak-free
+    /// installation's, beyond its tolerance, for [`HOLD_SHIFT_S`] of
+    /// evidence? At a hold the loop must feed any leak through the valve,
+    /// whatever the filters make of that flow (a land-leakage state may
+    /// absorb it), so `healthy` is withheld.
+    fn hold_shifted(&self) -> bool {
+        self.hold_shift_s >= T::c(HOLD_SHIFT_S)
+    }
+
+    /// Follow the valve command `u` (normalised) at quiet holds: its
+    /// average over [`HOLD_AVG_S`] of evidence and a CUSUM of that
+    /// average's excess over the tolerance, in tolerances (like the leak
+    /// readings': one outlying stretch cannot decide on its own). Off
+    /// while the tolerance is 0 (`baseline.hold_command_tolerance`).
+    fn follow_hold_command(&mut self, u: T, dt_w: T, region: usize, weight: T) {
+        let quiet_hold = region == crate::params::HOLDING_REGION && weight >= T::c(PAUSED_WEIGHT);
+        if self.hold_tol <= T::ZERO || !quiet_hold {
+            return;
+        }
+        let a = (dt_w / T::c(HOLD_AVG_S)).min(T::ONE);
+        let avg = match self.hold_avg {
+            Some(v) => v + a * (u - v),
+            None => u,
+        };
+        self.hold_avg = Some(avg);
+        let excess = (((avg - self.hold_ref).abs() - self.hold_tol) / self.hold_tol)
+            .clamp_to(-T::ONE, T::c(EXCESS_MAX));
+        self.hold_shift_s =
+            (self.hold_shift_s + excess * dt_w).clamp_to(T::ZERO, T::c(2.0 * HOLD_SHIFT_S));
     }
 
     /// Is a leak reading pending: has its lower bound stood above the
@@ -451,6 +505,7 @@ impl<T: Real> Decision<T> {
             region,
             t_s,
             valve_gains_learned,
+            u_valve,
         } = facts;
         if out.iter().any(Option::is_none) {
             self.reset_hold_s = self.reset_hold_after_s;
@@ -478,6 +533,7 @@ impl<T: Real> Decision<T> {
             let why = if misfit { health::VALVE_MISFIT } else { 0 };
             return health::EVIDENCE_PAUSED | why;
         }
+        self.follow_hold_command(u_valve, dt_w, region, weight);
         let a_evidence = (dt_w / self.slow_s).min(T::ONE);
         self.update_probabilities(out, dt_w, weight, a_evidence);
         self.update_backing(out);
@@ -725,6 +781,9 @@ impl<T: Real> Decision<T> {
         if self.provisional {
             f |= health::PROVISIONAL;
         }
+        if self.hold_shifted() {
+            f |= health::HOLD_COMMAND_SHIFTED;
+        }
         f
     }
 
@@ -810,6 +869,7 @@ mod tests {
             region,
             t_s,
             valve_gains_learned: [true; 2],
+            u_valve: 0.0,
         }
     }
 
@@ -1226,6 +1286,7 @@ mod tests {
             let t = t0 + i as f64 * 0.001;
             let f = SampleFacts {
                 valve_gains_learned: [sd < GAIN_SETTLED_SD; 2],
+                u_valve: 0.0,
                 ..facts(0.001, 1.0, true, 2, t)
             };
             flags = d.update(&out, f, &mut events);
@@ -1425,6 +1486,75 @@ mod tests {
         assert!(!d.conclusive());
         run(&mut d, &outputs(0.0), 0.2 * p.filter.warm_up_s);
         assert!(d.conclusive());
+    }
+
+    /// The nominal set with the leak-free installation holding the piston
+    /// at command 0.010 ± 0.003.
+    fn holding_at_0_010() -> Params {
+        let mut p = Params::nominal();
+        p.baseline.hold_command = 0.010;
+        p.baseline.hold_command_tolerance = 0.003;
+        p
+    }
+
+    /// Quiet samples at a hold with the valve command `u`.
+    fn holding(u: f64) -> impl Fn(f64) -> SampleFacts<f64> {
+        move |t| SampleFacts {
+            u_valve: u,
+            ..steady(t)
+        }
+    }
+
+    #[test]
+    fn a_holding_command_away_from_the_installations_withholds_healthy_and_raises_no_alarm() {
+        let mut d: Decision<f64> = Decision::new(&holding_at_0_010());
+        let mut feed = Feed::new();
+        let shifted = |d: &Decision<f64>| d.flags() & health::HOLD_COMMAND_SHIFTED != 0;
+        // Within the tolerance: healthy.
+        feed.run(&mut d, &outputs(0.0), 5.0, holding(0.012));
+        assert!(d.conclusive() && !shifted(&d));
+        // The loop feeds a flow the filters do not read (0.010 off, 2.3
+        // tolerances beyond): withheld within the 1 s average and 1 s of
+        // CUSUM, never an alarm.
+        feed.run(&mut d, &outputs(0.0), 0.5, holding(0.020));
+        assert!(d.conclusive(), "one stretch does not decide");
+        feed.run(&mut d, &outputs(0.0), 1.5, holding(0.020));
+        assert!(!d.conclusive() && shifted(&d));
+        feed.run(&mut d, &outputs(0.0), 30.0, holding(-0.001));
+        assert!(!d.conclusive() && shifted(&d), "either side");
+        assert!(d.latched().is_empty() && !d.pending());
+        // Back at the installation's command: healthy again once the
+        // average is back within the tolerance and the capped CUSUM
+        // (2 s) has run down.
+        feed.run(&mut d, &outputs(0.0), 4.0, holding(0.010));
+        assert!(d.conclusive() && !shifted(&d));
+    }
+
+    #[test]
+    fn the_holding_command_is_judged_at_quiet_holds_only_and_only_when_calibrated() {
+        let judged = |p: &Params, at: &dyn Fn(f64) -> SampleFacts<f64>| {
+            let mut d: Decision<f64> = Decision::new(p);
+            Feed::new().run(&mut d, &outputs(0.0), 10.0, at);
+            d.flags() & health::HOLD_COMMAND_SHIFTED != 0
+        };
+        let p = holding_at_0_010();
+        assert!(judged(&p, &holding(0.030)));
+        // Moving: the command moves the piston, it does not hold it.
+        let moving = |t| SampleFacts {
+            u_valve: 0.030,
+            ..facts(0.001, 1.0, true, 2, t)
+        };
+        assert!(!judged(&p, &moving));
+        // At a hold, but not quiet (evidence weight below 0.5).
+        let settling = |t| SampleFacts {
+            u_valve: 0.030,
+            ..facts(0.001, 0.4, true, 1, t)
+        };
+        assert!(!judged(&p, &settling));
+        // A set without the installation's holding command (tolerance 0).
+        let mut off = p;
+        off.baseline.hold_command_tolerance = 0.0;
+        assert!(!judged(&off, &holding(0.030)));
     }
 
     #[test]

@@ -340,6 +340,22 @@ params_struct! {
         /// installation (`calibrate` writes 0).
         pub provisional_floor_lpm: f64 = 0.0,
             in (0.0 ..= 10.0, "l/min"),
+        /// The valve command (normalised, −1 … 1) with which the leak-free
+        /// installation's loop holds the piston: `calibrate` writes the
+        /// median over its recording's quiet holds (after 5 s, evidence
+        /// weight ≥ 0.5, at least 0.2 s of them).
+        pub hold_command: f64 = 0.0,
+            in (-1.0 ..= 1.0, ""),
+        /// How far the average holding command may stand from
+        /// `hold_command` (normalised) before the monitor no longer claims
+        /// `healthy` (`health::HOLD_COMMAND_SHIFTED`): at a hold the loop
+        /// must feed any leak through the valve, whatever the filters make
+        /// of that flow. 0: not followed (the default; `calibrate` writes
+        /// 0.003 when it found the holds). A valve's null moves with oil
+        /// temperature and supply pressure: an installation run far from
+        /// where it was calibrated reads `inconclusive` more, never a leak.
+        pub hold_command_tolerance: f64 = 0.0,
+            in (0.0 ..= 0.5, ""),
     }
 }
 
