@@ -323,6 +323,42 @@ fn replay_reports_the_share_of_samples_the_valve_model_did_not_describe() {
 }
 
 #[test]
+fn replay_reports_the_share_of_samples_held_with_a_command_away_from_the_installations() {
+    // The reference rig's recording with its own parameters (no holding
+    // command: not followed), then with a holding command 0.2 away from
+    // the one its loop holds with: `healthy` is withheld at the holds,
+    // and the replay (like the CAN Health bit 15) says so.
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples");
+    let rig = root.join("reference-rig.toml");
+    let rec = root.join("healthy.csv.gz");
+    let replay = |params: &Path, json: bool| {
+        let mut args = vec!["replay", "--params", params.to_str().unwrap()];
+        if json {
+            args.push("--json");
+        }
+        args.push(rec.to_str().unwrap());
+        host_sim_ok(&args).stdout
+    };
+    let shifted = |params: &Path| {
+        let v: serde_json::Value = serde_json::from_slice(&replay(params, true)).unwrap();
+        v["hold_command_shifted_fraction"].as_f64().unwrap()
+    };
+    assert_eq!(shifted(&rig), 0.0);
+    let dir = tempfile::tempdir().unwrap();
+    let away = std::fs::read_to_string(&rig).unwrap().replace(
+        "[baseline]\n",
+        "[baseline]\nhold_command = 0.2\nhold_command_tolerance = 0.003\n",
+    );
+    let away = write(dir.path(), "hold-away.toml", &away);
+    assert!(shifted(&away) > 0.0);
+    let text = String::from_utf8_lossy(&replay(&away, false)).into_owned();
+    assert!(
+        text.contains("a valve command away from the installation's"),
+        "{text}"
+    );
+}
+
+#[test]
 fn human_summary_without_json() {
     let dir = tempfile::tempdir().unwrap();
     let rec = write(dir.path(), "ok.csv", &format!("{HEADER}{ROW0}"));
@@ -487,6 +523,13 @@ fn calibrate_writes_params_that_replay_accepts() {
     assert!(
         report.contains("valve flow gain") && report.contains("NIS"),
         "{report}"
+    );
+    // This rig's loop stops the piston inside the dead zone where the
+    // approach left the spool: no one holding command to follow.
+    let all = report.to_string() + &String::from_utf8_lossy(&out.stderr);
+    assert!(
+        all.contains("different commands at different holds"),
+        "{all}"
     );
     let text = std::fs::read_to_string(&params).unwrap();
     assert!(text.starts_with("# Installation parameters fitted by host-sim calibrate"));

@@ -335,8 +335,14 @@ fn planned_run(config: &PlanConfig, id: &str) -> (Vec<plant::Row>, Monitor<f32>,
 /// The statuses of run `id` of the survey's `--quick` matrix over its
 /// first `rigs` rigs, its cell calibrated as `host-sim eval` does it.
 fn quick_survey_run(rigs: usize, id: &str) -> Vec<Status> {
+    quick_run(RigSet::Survey, rigs, id)
+}
+
+/// The statuses of run `id` of `set`'s `--quick` matrix over its first
+/// `rigs` rigs, with its cell's calibration as `host-sim eval` does it.
+fn quick_run(set: RigSet, rigs: usize, id: &str) -> Vec<Status> {
     let config = PlanConfig {
-        sets: vec![RigSet::Survey],
+        sets: vec![set],
         rigs: Some(rigs),
         quick: true,
         ..PlanConfig::default()
@@ -935,4 +941,22 @@ fn a_leak_at_the_hold_before_a_step_test_is_seen_where_the_holds_land_leakage_is
         alarms(&st)
     );
     assert_eq!(st.last().unwrap().verdict, Verdict::External);
+}
+
+#[test]
+fn a_leak_the_loop_feeds_at_the_holds_is_never_healthy_where_the_filters_miss_it() {
+    // Ninth survey rig 424 at 50 bar, 40 °C, a 10 s step test with a
+    // 1 l/min internal leak from the start: the filters read none of it
+    // (the run ended `healthy`), but to hold the piston before the step
+    // the loop must feed the leak through the valve, with a command away
+    // from the one the cell's calibration recording held it with.
+    let cell = "survey9/rig424/50bar/40C";
+    let leak = quick_run(RigSet::Survey9, 10, &format!("{cell}/step-internal-1.00"));
+    assert!(leak.iter().any(Status::hold_command_shifted));
+    assert!(alarms(&leak).is_empty(), "{:?}", alarms(&leak));
+    assert_eq!(leak.last().unwrap().verdict, Verdict::Inconclusive);
+    // The same cell's healthy step test holds with the calibrated command.
+    let healthy = quick_run(RigSet::Survey9, 10, &format!("{cell}/healthy-step"));
+    assert!(!healthy.iter().any(Status::hold_command_shifted));
+    assert_eq!(healthy.last().unwrap().verdict, Verdict::Healthy);
 }

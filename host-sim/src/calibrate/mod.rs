@@ -51,6 +51,10 @@
 //!    (retracting, holding, extending), becomes `[baseline]`, which the
 //!    monitor subtracts before deciding. A region with less than
 //!    `MIN_REGION_EVIDENCE_S` of evidence gets 0.
+//! 6. **Holding command**, after the refit (`hold.rs`): the median valve
+//!    command at the recording's quiet holds, replayed with the written
+//!    parameters; at a hold the loop feeds any leak through the valve, so
+//!    the monitor withholds `healthy` where the holds stand away from it.
 //!
 //! **Held-out validation.** Steps 1–5 run on two thirds of the recording;
 //! the monitor with those parameters then runs over the whole recording
@@ -76,6 +80,7 @@
 
 mod check;
 mod fit;
+mod hold;
 pub mod noise;
 pub mod oscillation;
 mod procedure;
@@ -361,6 +366,17 @@ pub fn calibrate(samples: &[Sample], start: &Params) -> Result<Calibration, Cali
 /// measured ([`oscillation::measure`]), for a caller that reports it
 /// whatever comes of the calibration.
 pub fn calibrate_given(
+    samples: &[Sample],
+    start: &Params,
+    oscillation: Option<&Oscillation>,
+) -> Result<Calibration, CalibrationError> {
+    calibrate_holds(samples, start, oscillation).map(|mut cal| {
+        hold::follow_the_holding_command(samples, &mut cal);
+        cal
+    })
+}
+
+fn calibrate_holds(
     samples: &[Sample],
     start: &Params,
     oscillation: Option<&Oscillation>,

@@ -351,9 +351,10 @@ params_struct! {
         /// `healthy` (`health::HOLD_COMMAND_SHIFTED`): at a hold the loop
         /// must feed any leak through the valve, whatever the filters make
         /// of that flow. 0: not followed (the default; `calibrate` writes
-        /// 0.003 when it found the holds). A valve's null moves with oil
-        /// temperature and supply pressure: an installation run far from
-        /// where it was calibrated reads `inconclusive` more, never a leak.
+        /// 0.003 where its recording's quiet holds agree on one command).
+        /// A valve's null moves with oil temperature and supply pressure:
+        /// an installation run far from where it was calibrated reads
+        /// `inconclusive` more, never a leak.
         pub hold_command_tolerance: f64 = 0.0,
             in (0.0 ..= 0.5, ""),
     }
