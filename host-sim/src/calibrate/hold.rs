@@ -17,9 +17,10 @@ use monitor::{Monitor, Sample};
 use super::{Calibration, Fit};
 
 /// How far the holding command may move from the calibrated one,
-/// normalised. On the survey rigs the quiet holds of healthy runs stood
-/// within it in 2 of 40 and 0 of 36 calibrated cells, those of runs with
-/// a 0.2 l/min internal leak beyond it in 37 of 40 and 29 of 36.
+/// normalised. On the ninth and eighth survey's calibrated cells the quiet
+/// holds of the healthy closed-loop runs stood beyond it in 2 of 40 and
+/// 0 of 36, those of runs with a 0.2 l/min internal leak in 37 of 40 and
+/// 29 of 36.
 pub const HOLD_COMMAND_TOLERANCE: f64 = 0.003;
 
 /// How far apart, in tolerances, the 10 % and 90 % quantiles of the

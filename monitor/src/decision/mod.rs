@@ -1286,7 +1286,6 @@ mod tests {
             let t = t0 + i as f64 * 0.001;
             let f = SampleFacts {
                 valve_gains_learned: [sd < GAIN_SETTLED_SD; 2],
-                u_valve: 0.0,
                 ..facts(0.001, 1.0, true, 2, t)
             };
             flags = d.update(&out, f, &mut events);
