@@ -257,6 +257,10 @@ pub use crate::decision::VALVE_GAIN_MISFIT;
 /// ([`Status::quasi_steady`]).
 pub use crate::decision::PAUSED_WEIGHT;
 
+/// Is a sample in an operating region with an evidence weight a quiet
+/// hold, where the holding command is judged?
+pub use crate::decision::quiet_hold;
+
 impl Status {
     /// The valve flow-gain deviations were beyond what the valve model
     /// describes ([`VALVE_GAIN_MISFIT`]) and the decision counted the

@@ -153,6 +153,14 @@ pub const GAIN_SETTLED_SD: f64 = 0.01;
 /// `EVIDENCE_PAUSED`: the plant is not quasi-steady enough for it to count
 /// for much.
 pub const PAUSED_WEIGHT: f64 = 0.5;
+/// Is a sample in operating `region` with evidence `weight` a quiet hold:
+/// the piston at rest and the plant quasi-steady enough to count
+/// ([`PAUSED_WEIGHT`])? There the holding command is judged, and
+/// calibration measures the installation's from the same samples.
+pub fn quiet_hold<T: Real>(region: usize, weight: T) -> bool {
+    region == HOLDING_REGION && weight >= T::c(PAUSED_WEIGHT)
+}
+
 /// Averaging time of the valve command at quiet holds, s of evidence.
 pub const HOLD_AVG_S: f64 = 1.0;
 /// Evidence time the holding command must stand beyond its tolerance
@@ -415,17 +423,12 @@ impl<T: Real> Decision<T> {
     /// readings': one outlying stretch cannot decide on its own). Off
     /// while the tolerance is 0 (`baseline.hold_command_tolerance`).
     fn follow_hold_command(&mut self, u: T, dt_w: T, region: usize, weight: T) {
-        let quiet_hold = region == crate::params::HOLDING_REGION && weight >= T::c(PAUSED_WEIGHT);
-        if self.hold_tol <= T::ZERO || !quiet_hold {
+        if self.hold_tol <= T::ZERO || !quiet_hold(region, weight) {
             return;
         }
-        let a = (dt_w / T::c(HOLD_AVG_S)).min(T::ONE);
-        let avg = match self.hold_avg {
-            Some(v) => v + a * (u - v),
-            None => u,
-        };
-        self.hold_avg = Some(avg);
-        let excess = (((avg - self.hold_ref).abs() - self.hold_tol) / self.hold_tol)
+        let avg = self.hold_avg.get_or_insert(u);
+        follow(avg, (dt_w / T::c(HOLD_AVG_S)).min(T::ONE), u);
+        let excess = (((*avg - self.hold_ref).abs() - self.hold_tol) / self.hold_tol)
             .clamp_to(-T::ONE, T::c(EXCESS_MAX));
         self.hold_shift_s =
             (self.hold_shift_s + excess * dt_w).clamp_to(T::ZERO, T::c(2.0 * HOLD_SHIFT_S));
