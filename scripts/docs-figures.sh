@@ -263,7 +263,7 @@ for p in "${producers[@]}"; do
     throughput) fig_throughput ;;
     eval) eval_block dev-quick --set dev --quick ;;
     # A `--quick` set by its `--set` name (host-sim refuses a set it lacks).
-    holdout | wide | survey | survey[2-9] | survey10) eval_block "$p-quick" --set "$p" --quick ;;
+    holdout | wide | survey | survey[2-9] | survey[1-9][0-9]) eval_block "$p-quick" --set "$p" --quick ;;
     dev-full) eval_block dev-full --set dev ;;
     size) fig_size ;;
     bench) fig_bench ;;

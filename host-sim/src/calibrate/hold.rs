@@ -9,12 +9,19 @@
 //! no such reference: it is where the model's edges open, fitted from the
 //! moves, and healthy holds stood more than 0.003 from it on 18 of 40
 //! ninth-survey cells.
+//!
+//! `fit::hold_command` (the median command at rest in the fit's decimated
+//! data, 2 s needed) places a kept valve's null; the reference here is
+//! taken from the very samples the decision judges ([`quiet_hold`] on
+//! the monitor's own region and evidence weight), so that reference and
+//! judgement see the same holds.
 
-use monitor::params::{Params, HOLDING_REGION};
-use monitor::status::PAUSED_WEIGHT;
+use monitor::params::Params;
+use monitor::status::quiet_hold;
 use monitor::{Monitor, Sample};
 
 use super::{Calibration, Fit};
+use crate::replay::sample_period;
 
 /// How far the holding command may move from the calibrated one,
 /// normalised. On the ninth and eighth survey's calibrated cells the quiet
@@ -46,27 +53,27 @@ const SKIP_S: f64 = 5.0;
 /// that.
 pub(super) fn follow_the_holding_command(samples: &[Sample], cal: &mut Calibration) {
     let mut us = quiet_hold_commands(samples, &cal.params);
-    let secs = us.len() as f64 * sample_period_s(samples);
+    let period_s = samples
+        .first()
+        .and_then(|first| sample_period(None, first, samples.get(1)))
+        .unwrap_or(1e-3);
+    let secs = us.len() as f64 * period_s;
     if us.len() < MIN_HOLD_SAMPLES {
-        cal.params.baseline.hold_command = 0.0;
-        cal.params.baseline.hold_command_tolerance = 0.0;
-        cal.baseline_notes.push(format!(
-            "the recording held the piston quietly for {secs:.2} s ({} samples, {MIN_HOLD_SAMPLES} needed): the holding command is not followed (baseline.hold_command_tolerance 0)",
-            us.len(),
-        ));
-        return;
+        let n = us.len();
+        let why = format!(
+            "the recording held the piston quietly for {secs:.2} s ({n} samples, {MIN_HOLD_SAMPLES} needed)"
+        );
+        return not_followed(cal, &why);
     }
     us.sort_by(f64::total_cmp);
     let median = us[us.len() / 2];
     let (lo, hi) = (us[us.len() / 10], us[us.len() * 9 / 10]);
-    if hi - lo > MAX_SPREAD_TOLERANCES * HOLD_COMMAND_TOLERANCE {
-        cal.params.baseline.hold_command = 0.0;
-        cal.params.baseline.hold_command_tolerance = 0.0;
-        cal.baseline_notes.push(format!(
-            "the loop held the piston with different commands at different holds (10–90 % {lo:+.4} … {hi:+.4}, more than {:.3} apart): the holding command is not followed (baseline.hold_command_tolerance 0)",
-            MAX_SPREAD_TOLERANCES * HOLD_COMMAND_TOLERANCE
-        ));
-        return;
+    let limit = MAX_SPREAD_TOLERANCES * HOLD_COMMAND_TOLERANCE;
+    if hi - lo > limit {
+        let why = format!(
+            "the loop held the piston with different commands at different holds (10–90 % {lo:+.4} … {hi:+.4}, more than {limit:.3} apart)"
+        );
+        return not_followed(cal, &why);
     }
     cal.params.baseline.hold_command = median;
     cal.params.baseline.hold_command_tolerance = HOLD_COMMAND_TOLERANCE;
@@ -77,9 +84,19 @@ pub(super) fn follow_the_holding_command(samples: &[Sample], cal: &mut Calibrati
     });
 }
 
+/// Leaves the holding command unfollowed (tolerance 0) in `cal`, and a
+/// note saying `why`.
+fn not_followed(cal: &mut Calibration, why: &str) {
+    cal.params.baseline.hold_command = 0.0;
+    cal.params.baseline.hold_command_tolerance = 0.0;
+    cal.baseline_notes.push(format!(
+        "{why}: the holding command is not followed (baseline.hold_command_tolerance 0)"
+    ));
+}
+
 /// The valve commands (normalised) read at the quiet holds of `samples`
-/// replayed with `params`: piston at rest, evidence weight ≥
-/// [`PAUSED_WEIGHT`], after [`SKIP_S`].
+/// replayed with `params` ([`quiet_hold`], as the monitor judges them),
+/// after [`SKIP_S`].
 fn quiet_hold_commands(samples: &[Sample], params: &Params) -> Vec<f64> {
     let (Ok(mut m), Some(first)) = (Monitor::<f32>::new(params), samples.first()) else {
         return Vec::new();
@@ -87,23 +104,11 @@ fn quiet_hold_commands(samples: &[Sample], params: &Params) -> Vec<f64> {
     let mut us = Vec::new();
     for s in samples {
         let status = m.step(s);
-        let quiet =
-            m.region() == HOLDING_REGION && f64::from(status.evidence_weight) >= PAUSED_WEIGHT;
-        if s.t_s - first.t_s > SKIP_S && quiet {
+        if s.t_s - first.t_s > SKIP_S && quiet_hold(m.region(), status.evidence_weight) {
             us.extend(s.u_valve.map(f64::from));
         }
     }
     us
-}
-
-/// The mean sample period of `samples`, s (1 ms for fewer than two).
-fn sample_period_s(samples: &[Sample]) -> f64 {
-    match (samples.first(), samples.last()) {
-        (Some(a), Some(b)) if samples.len() > 1 && b.t_s > a.t_s => {
-            (b.t_s - a.t_s) / (samples.len() - 1) as f64
-        }
-        _ => 1e-3,
-    }
 }
 
 #[cfg(test)]

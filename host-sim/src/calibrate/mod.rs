@@ -370,13 +370,17 @@ pub fn calibrate_given(
     start: &Params,
     oscillation: Option<&Oscillation>,
 ) -> Result<Calibration, CalibrationError> {
-    calibrate_holds(samples, start, oscillation).map(|mut cal| {
+    calibrate_choosing_hold_land(samples, start, oscillation).map(|mut cal| {
         hold::follow_the_holding_command(samples, &mut cal);
         cal
     })
 }
 
-fn calibrate_holds(
+/// The fit and its validation with the holds' land leakage held
+/// (`HoldLand::Held`); without a temperature reading, calibrated again
+/// with it free where held the laminar factor runs away or the
+/// calibration is refused (the first warning says why).
+fn calibrate_choosing_hold_land(
     samples: &[Sample],
     start: &Params,
     oscillation: Option<&Oscillation>,
@@ -412,7 +416,8 @@ fn calibrate_holds(
     })
 }
 
-/// [`calibrate_given`] with the holds' land leakage as `holds` says.
+/// [`calibrate_choosing_hold_land`] with the holds' land leakage as
+/// `holds` says.
 fn calibrate_bounded(
     samples: &[Sample],
     start: &Params,
