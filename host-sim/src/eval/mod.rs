@@ -106,6 +106,12 @@ pub const SURVEY9_RIGS: [u64; 48] = consecutive(415);
 /// the others (reported separately). Disjoint from the other sets.
 pub const SURVEY10_RIGS: [u64; 48] = consecutive(463);
 
+/// Eleventh survey rigs (seeds 511–558): set aside at the end of the sixth
+/// session of 2026-12-06 and first run, untuned, at the start of the
+/// next, before anything in it was looked at; from then on tuned on like
+/// the others (reported separately). Disjoint from the other sets.
+pub const SURVEY11_RIGS: [u64; 48] = consecutive(511);
+
 /// `N` consecutive seeds from `first`.
 const fn consecutive<const N: usize>(first: u64) -> [u64; N] {
     let mut seeds = [0; N];
@@ -147,13 +153,15 @@ pub enum RigSet {
     Survey9,
     /// [`SURVEY10_RIGS`].
     Survey10,
+    /// [`SURVEY11_RIGS`].
+    Survey11,
 }
 
 impl RigSet {
     /// Every set, in report order: development sets first, held-out last.
     /// A new set goes here too (the report, `--set` and the disjointness
     /// test read this list).
-    pub const ALL: [RigSet; 13] = [
+    pub const ALL: [RigSet; 14] = [
         Self::Dev,
         Self::Wide,
         Self::Survey,
@@ -166,6 +174,7 @@ impl RigSet {
         Self::Survey8,
         Self::Survey9,
         Self::Survey10,
+        Self::Survey11,
         Self::Holdout,
     ];
 
@@ -259,6 +268,12 @@ impl RigSet {
                 "survey10",
                 "Tenth survey development rigs",
                 "A tenth survey sample (seeds 463–510), first run untuned at the start of the sixth session of 2026-12-06 (use with `--quick`)",
+            ),
+            Self::Survey11 => (
+                &SURVEY11_RIGS,
+                "survey11",
+                "Eleventh survey development rigs",
+                "An eleventh survey sample (seeds 511–558), first run untuned at the start of the seventh session of 2026-12-06 (use with `--quick`)",
             ),
         };
         SetFacts {
