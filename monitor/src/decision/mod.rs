@@ -22,7 +22,9 @@
 //!    and a new leak while one is latched escalates (internal + external
 //!    = both); with one leak raised, the other must also read more than
 //!    [`CROSS_TALK`] × its flow (the model's error shares flow between
-//!    the two). The alarm level is the
+//!    the two). While no hypothesis fits (mean NIS of the best filter
+//!    above [`MISMATCH_NIS`]) the CUSUMs hold: the leak states then take
+//!    in model error, not a leak. The alarm level is the
 //!    user's, raised to the installation's floor in the current operating
 //!    region; entering a region with a lower level it falls as the
 //!    detection average takes in that region's evidence (which still
@@ -434,6 +436,12 @@ impl<T: Real> Decision<T> {
             (self.hold_shift_s + excess * dt_w).clamp_to(T::ZERO, T::c(2.0 * HOLD_SHIFT_S));
     }
 
+    /// Does the hypothesis with the most evidence fit: its mean NIS at or
+    /// below [`MISMATCH_NIS`]?
+    fn fits(&self) -> bool {
+        self.nis[self.leading as usize] <= T::c(MISMATCH_NIS)
+    }
+
     /// Is a leak reading pending: has its lower bound stood above the
     /// alarm level recently enough that its CUSUM has not run back to 0?
     /// The alarm waits for persistence; `healthy` must not claim what it
@@ -540,13 +548,16 @@ impl<T: Real> Decision<T> {
         let a_evidence = (dt_w / self.slow_s).min(T::ONE);
         self.update_probabilities(out, dt_w, weight, a_evidence);
         self.update_backing(out);
-        if self.accumulate_excess(dt_w) {
+        // Where no hypothesis fits, the leak states take in model error:
+        // the CUSUMs hold, neither raising nor running down, until one
+        // fits again.
+        if self.fits() && self.accumulate_excess(dt_w) {
             if let Some(latched) = self.latch.raise(self.raised.set(), t_s) {
                 let _ = events.push(Event::AlarmRaised(Verdict::of_leaks(latched)));
             }
         }
         self.update_warning(region);
-        self.mismatch = self.nis[self.leading as usize] > T::c(MISMATCH_NIS) || self.contradicted();
+        self.mismatch = !self.fits() || self.contradicted();
         if weight < T::c(PAUSED_WEIGHT) {
             health::EVIDENCE_PAUSED
         } else {
@@ -967,6 +978,41 @@ mod tests {
             }
         }
         None
+    }
+
+    #[test]
+    fn a_leak_reading_while_no_hypothesis_fits_raises_no_alarm_until_one_does() {
+        let p = Params::nominal();
+        let mut d: Decision<f64> = Decision::new(&p);
+        let mut feed = Feed::new();
+        let with_nis = |lpm: f64, nis: f64| {
+            let mut out = outputs(lpm);
+            for o in out.iter_mut().flatten() {
+                o.nis = nis;
+            }
+            out
+        };
+        // Every filter misfits (NIS 100 against 3), then the `both` filter
+        // reads five times the alarm level: no alarm, no `healthy`.
+        feed.run(&mut d, &with_nis(0.0, 100.0), 20.0, steady);
+        feed.run(
+            &mut d,
+            &with_nis(5.0 * p.alarm.alarm_lpm, 100.0),
+            3.0,
+            steady,
+        );
+        assert!(d.latched().is_empty());
+        assert!(!d.conclusive());
+        assert!(d.flags() & health::MODEL_MISMATCH != 0);
+        // The same reading once the filters fit again: raised.
+        feed.run(
+            &mut d,
+            &with_nis(5.0 * p.alarm.alarm_lpm, 3.0),
+            10.0,
+            steady,
+        );
+        assert!(d.latched().contains(Leak::Internal));
+        assert!(d.flags() & health::MODEL_MISMATCH == 0);
     }
 
     #[test]
