@@ -850,13 +850,24 @@ fn a_loop_that_hunts_is_named_as_the_cause_of_the_refusal() {
         "{why}"
     );
     // The monitor says so itself on the same minute (health flag, CAN
-    // `Health` bit 13) for most of it, and never with a leak alarm.
+    // `Health` bit 13) for most of it, and never with a leak alarm; while
+    // it does, it takes no evidence in (the hypotheses' probabilities
+    // stand still).
     let mut m = Monitor::<f32>::new(&Params::nominal()).unwrap();
+    let mut before: Option<[f32; 4]> = None;
     let flagged = samples
         .iter()
         .map(|s| m.step(s))
         .inspect(|st| assert!(!st.verdict.is_leak(), "{:?}", st.verdict))
-        .filter(|st| st.health & health::LOOP_OSCILLATING != 0)
+        .filter(|st| {
+            let hunting = st.health & health::LOOP_OSCILLATING != 0;
+            let now = st.evidence.map(|e| e.probability);
+            if let (true, Some(before)) = (hunting, before) {
+                assert_eq!(now, before, "evidence taken in at {} s", st.t_s);
+            }
+            before = Some(now);
+            hunting
+        })
         .count();
     let share = flagged as f64 / samples.len() as f64;
     assert!(

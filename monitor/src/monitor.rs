@@ -378,10 +378,17 @@ impl<T: Real> Monitor<T> {
         if warming {
             flags |= health::WARMING_UP;
         }
+        // A hunting loop is no evidence either way: the model's
+        // quasi-steady valve and load do not describe its swings, and the
+        // leak states take in what they miss (the survey rigs' false
+        // alarms sat on loops that hunt).
+        let counts = !warming
+            && !no_evidence
+            && flags & (health::FILTER_RESET | health::LOOP_OSCILLATING) == 0;
         let facts = SampleFacts {
             dt: T::c(dt),
             weight: self.quiet.weight(),
-            valid: !warming && !no_evidence && flags & health::FILTER_RESET == 0,
+            valid: counts,
             observable: !pinned,
             region,
             t_s: sample.t_s,

@@ -178,7 +178,7 @@ pub struct SampleFacts<T> {
     /// of `dt` that counts as evidence.
     pub weight: T,
     /// The sample counts as evidence at all (warm-up over, sensors
-    /// trusted, no filter reset).
+    /// trusted, no filter reset, the position loop not hunting).
     pub valid: bool,
     /// The plant shows the leaks at all. Not with the piston pinned
     /// against a stop with the valve open: then the leak flows are not
