@@ -125,8 +125,10 @@ pub mod health {
     pub const PROVISIONAL: u16 = 1 << 12;
     /// The machine's position loop hunts: most of the last 2 s the valve
     /// command and the chamber pressures oscillated together
-    /// (`signal::oscillation`). Such samples are no leak evidence, so the
-    /// verdict stays `inconclusive` while it lasts; stabilise the loop.
+    /// (`signal::oscillation`). Such samples count for nothing, neither
+    /// leak nor health (the decision takes them in as it would a filter
+    /// reset's); a loop that keeps hunting leaves too little recent
+    /// evidence and the verdict turns `inconclusive`. Stabilise the loop.
     pub const LOOP_OSCILLATING: u16 = 1 << 13;
     /// The `both` filter held valve flow gains the valve model does not
     /// describe (more than `decision::VALVE_GAIN_MISFIT` off the
