@@ -380,8 +380,8 @@ impl<T: Real> Monitor<T> {
         }
         // A hunting loop is no evidence either way: the model's
         // quasi-steady valve and load do not describe its swings, and the
-        // leak states take in what they miss (the survey rigs' false
-        // alarms sat on loops that hunt).
+        // leak states take in what they miss (three of the survey sets'
+        // false alarms came with the flag set).
         let counts = !warming
             && !no_evidence
             && flags & (health::FILTER_RESET | health::LOOP_OSCILLATING) == 0;

@@ -126,9 +126,10 @@ pub mod health {
     /// The machine's position loop hunts: most of the last 2 s the valve
     /// command and the chamber pressures oscillated together
     /// (`signal::oscillation`). Such samples count for nothing, neither
-    /// leak nor health (the decision takes them in as it would a filter
-    /// reset's); a loop that keeps hunting leaves too little recent
-    /// evidence and the verdict turns `inconclusive`. Stabilise the loop.
+    /// leak nor health, like a filter reset's; a loop that keeps hunting
+    /// leaves too little recent evidence and the verdict turns
+    /// `inconclusive` (after a minute or more of it with the default
+    /// `evidence_memory_s` of 30 s). Stabilise the loop.
     pub const LOOP_OSCILLATING: u16 = 1 << 13;
     /// The `both` filter held valve flow gains the valve model does not
     /// describe (more than `decision::VALVE_GAIN_MISFIT` off the
