@@ -551,13 +551,14 @@ impl<T: Real> Decision<T> {
         // Where no hypothesis fits, the leak states take in model error:
         // the CUSUMs hold, neither raising nor running down, until one
         // fits again.
-        if self.fits() && self.accumulate_excess(dt_w) {
+        let fits = self.fits();
+        if fits && self.accumulate_excess(dt_w) {
             if let Some(latched) = self.latch.raise(self.raised.set(), t_s) {
                 let _ = events.push(Event::AlarmRaised(Verdict::of_leaks(latched)));
             }
         }
         self.update_warning(region);
-        self.mismatch = !self.fits() || self.contradicted();
+        self.mismatch = !fits || self.contradicted();
         if weight < T::c(PAUSED_WEIGHT) {
             health::EVIDENCE_PAUSED
         } else {
