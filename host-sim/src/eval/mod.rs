@@ -112,6 +112,12 @@ pub const SURVEY10_RIGS: [u64; 48] = consecutive(463);
 /// the others (reported separately). Disjoint from the other sets.
 pub const SURVEY11_RIGS: [u64; 48] = consecutive(511);
 
+/// Twelfth survey rigs (seeds 559–606): set aside at the end of the
+/// seventh session of 2026-12-06 and first run, untuned, at the start of
+/// the next, before anything in it was looked at; from then on tuned on
+/// like the others (reported separately). Disjoint from the other sets.
+pub const SURVEY12_RIGS: [u64; 48] = consecutive(559);
+
 /// `N` consecutive seeds from `first`.
 const fn consecutive<const N: usize>(first: u64) -> [u64; N] {
     let mut seeds = [0; N];
@@ -155,13 +161,15 @@ pub enum RigSet {
     Survey10,
     /// [`SURVEY11_RIGS`].
     Survey11,
+    /// [`SURVEY12_RIGS`].
+    Survey12,
 }
 
 impl RigSet {
     /// Every set, in report order: development sets first, held-out last.
     /// A new set goes here too (the report, `--set` and the disjointness
     /// test read this list).
-    pub const ALL: [RigSet; 14] = [
+    pub const ALL: [RigSet; 15] = [
         Self::Dev,
         Self::Wide,
         Self::Survey,
@@ -175,6 +183,7 @@ impl RigSet {
         Self::Survey9,
         Self::Survey10,
         Self::Survey11,
+        Self::Survey12,
         Self::Holdout,
     ];
 
@@ -274,6 +283,12 @@ impl RigSet {
                 "survey11",
                 "Eleventh survey development rigs",
                 "An eleventh survey sample (seeds 511–558), first run untuned at the start of the seventh session of 2026-12-06 (use with `--quick`)",
+            ),
+            Self::Survey12 => (
+                &SURVEY12_RIGS,
+                "survey12",
+                "Twelfth survey development rigs",
+                "A twelfth survey sample (seeds 559–606), first run untuned at the start of the eighth session of 2026-12-06 (use with `--quick`)",
             ),
         };
         SetFacts {
