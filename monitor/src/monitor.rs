@@ -359,9 +359,11 @@ impl<T: Real> Monitor<T> {
             self.matching
                 .update(&b.innovation_sq, &b.predicted_var, &m.r, T::c(dt));
         }
+        let mut chamber_dp_bar = T::ZERO;
         if let Some(h) = &ok[0] {
             let s = bank.plant_state(Hypothesis::Healthy);
             let bar = T::c(P_REF / BAR);
+            chamber_dp_bar = (s[4] - s[5]) * bar;
             self.quiet.update(
                 s[4] * bar,
                 s[5] * bar,
@@ -394,6 +396,7 @@ impl<T: Real> Monitor<T> {
             t_s: sample.t_s,
             valve_gains_learned: bank.valve_gains_learned(GAIN_SETTLED_SD),
             u_valve,
+            chamber_dp_bar,
         };
         flags |= self.decision.update(&ok, facts, &mut events);
         self.status(sample.t_s, checked.faulted, flags, events)

@@ -143,7 +143,12 @@ pub mod health {
     /// `decision::HOLD_SHIFT_S` of evidence: some flow the installation
     /// did not have is fed through the valve — a leak the filters may not
     /// name, or a valve whose null moved. Never `healthy` while it lasts
-    /// (the verdict is `inconclusive` unless a leak is latched).
+    /// (the verdict is `inconclusive` unless a leak is latched). Beyond
+    /// `decision::HOLD_ALARM_TOLERANCES` for `decision::HOLD_ALARM_S` of
+    /// evidence, in the direction one leak calls for (into the rod chamber:
+    /// external; into the piston chamber standing at the higher pressure:
+    /// internal) and with the filters reading that leak at its warning
+    /// level, that leak is raised.
     pub const HOLD_COMMAND_SHIFTED: u16 = 1 << 15;
 
     /// Every flag above with its name (as the CAN decoder and logs show

@@ -168,6 +168,13 @@ pub const HOLD_AVG_S: f64 = 1.0;
 /// Evidence time the holding command must stand beyond its tolerance
 /// before `healthy` is withheld, s (`health::HOLD_COMMAND_SHIFTED`).
 pub const HOLD_SHIFT_S: f64 = 1.0;
+/// Tolerances beyond the leak-free installation's holding command at
+/// which a shift names the leak its direction calls for.
+pub const HOLD_ALARM_TOLERANCES: f64 = 2.0;
+/// Evidence time the holding command must stand beyond
+/// [`HOLD_ALARM_TOLERANCES`] in one leak's direction before that leak is
+/// raised, s.
+pub const HOLD_ALARM_S: f64 = 2.0;
 
 /// What the decision is told of one sample besides the filters' outputs.
 #[derive(Clone, Copy, Debug)]
@@ -196,6 +203,9 @@ pub struct SampleFacts<T> {
     /// Valve command as read (held over a rejected reading), normalised
     /// −1 … 1.
     pub u_valve: T,
+    /// Piston-chamber less rod-chamber pressure, bar (signed): which way
+    /// an internal leak flows.
+    pub chamber_dp_bar: T,
 }
 
 /// Decision state.
@@ -224,6 +234,10 @@ pub struct Decision<T> {
     hold_avg: Option<T>,
     /// CUSUM of that average's excess over the tolerance, s of evidence.
     hold_shift_s: T,
+    /// The leak the holding command's shift calls for, and the CUSUM of
+    /// its excess over [`HOLD_ALARM_TOLERANCES`], s of evidence.
+    hold_names: Option<Leak>,
+    hold_alarm_s: T,
     /// Leaks whose CUSUM reached the debounce time since the last
     /// (re)start or acknowledgement.
     raised: PerLeak<bool>,
@@ -347,6 +361,8 @@ impl<T: Real> Decision<T> {
             hold_tol: T::c(params.baseline.hold_command_tolerance),
             hold_avg: None,
             hold_shift_s: T::ZERO,
+            hold_names: None,
+            hold_alarm_s: T::ZERO,
             min_probability: T::c(params.alarm.min_probability),
             baseline: PerLeak::new(
                 params.baseline.internal_lpm_per_10bar.map(T::c),
@@ -395,6 +411,8 @@ impl<T: Real> Decision<T> {
         self.recent_time = T::ZERO;
         self.hold_avg = None;
         self.hold_shift_s = T::ZERO;
+        self.hold_names = None;
+        self.hold_alarm_s = T::ZERO;
     }
 
     /// Has the monitor evaluated enough valid evidence to claim healthy?
@@ -424,16 +442,46 @@ impl<T: Real> Decision<T> {
     /// average's excess over the tolerance, in tolerances (like the leak
     /// readings': one outlying stretch cannot decide on its own). Off
     /// while the tolerance is 0 (`baseline.hold_command_tolerance`).
-    fn follow_hold_command(&mut self, u: T, dt_w: T, region: usize, weight: T) {
+    fn follow_hold_command(&mut self, u: T, dt_w: T, region: usize, weight: T, dp: T) {
         if self.hold_tol <= T::ZERO || !quiet_hold(region, weight) {
             return;
         }
         let avg = self.hold_avg.get_or_insert(u);
         follow(avg, (dt_w / T::c(HOLD_AVG_S)).min(T::ONE), u);
-        let excess = (((*avg - self.hold_ref).abs() - self.hold_tol) / self.hold_tol)
-            .clamp_to(-T::ONE, T::c(EXCESS_MAX));
+        let shift = *avg - self.hold_ref;
+        let excess =
+            ((shift.abs() - self.hold_tol) / self.hold_tol).clamp_to(-T::ONE, T::c(EXCESS_MAX));
         self.hold_shift_s =
             (self.hold_shift_s + excess * dt_w).clamp_to(T::ZERO, T::c(2.0 * HOLD_SHIFT_S));
+        // To hold the piston the loop must feed a leak's flow into the
+        // chamber it drains: an external (rod-seal) leak through the
+        // retracting side, an internal one into the chamber at the higher
+        // pressure. With the piston chamber higher the two point opposite
+        // ways and the shift names the leak; otherwise it cannot.
+        let names = if dp <= T::ZERO {
+            None
+        } else if shift > T::ZERO {
+            Some(Leak::Internal)
+        } else {
+            Some(Leak::External)
+        };
+        if names != self.hold_names {
+            self.hold_names = names;
+            self.hold_alarm_s = T::ZERO;
+        }
+        let excess = ((shift.abs() - T::c(HOLD_ALARM_TOLERANCES) * self.hold_tol) / self.hold_tol)
+            .clamp_to(-T::ONE, T::c(EXCESS_MAX));
+        self.hold_alarm_s =
+            (self.hold_alarm_s + excess * dt_w).clamp_to(T::ZERO, T::c(2.0 * HOLD_ALARM_S));
+    }
+
+    /// The leak the holding command names, once its shift has stood
+    /// beyond [`HOLD_ALARM_TOLERANCES`] for [`HOLD_ALARM_S`] of evidence.
+    fn hold_names_leak(&self) -> Option<Leak> {
+        self.hold_names.filter(|&k| {
+            self.hold_alarm_s >= T::c(HOLD_ALARM_S)
+                && self.slow[k] >= self.warning_lpm[k][HOLDING_REGION]
+        })
     }
 
     /// Does the hypothesis with the most evidence fit: its mean NIS at or
@@ -517,6 +565,7 @@ impl<T: Real> Decision<T> {
             t_s,
             valve_gains_learned,
             u_valve,
+            chamber_dp_bar,
         } = facts;
         if out.iter().any(Option::is_none) {
             self.reset_hold_s = self.reset_hold_after_s;
@@ -544,7 +593,7 @@ impl<T: Real> Decision<T> {
             let why = if misfit { health::VALVE_MISFIT } else { 0 };
             return health::EVIDENCE_PAUSED | why;
         }
-        self.follow_hold_command(u_valve, dt_w, region, weight);
+        self.follow_hold_command(u_valve, dt_w, region, weight, chamber_dp_bar);
         let a_evidence = (dt_w / self.slow_s).min(T::ONE);
         self.update_probabilities(out, dt_w, weight, a_evidence);
         self.update_backing(out);
@@ -552,7 +601,12 @@ impl<T: Real> Decision<T> {
         // the CUSUMs hold, neither raising nor running down, until one
         // fits again.
         let fits = self.fits();
-        if fits && self.accumulate_excess(dt_w) {
+        let mut new_leak = fits && self.accumulate_excess(dt_w);
+        if let Some(k) = self.hold_names_leak().filter(|&k| fits && !self.raised[k]) {
+            self.raised[k] = true;
+            new_leak = true;
+        }
+        if new_leak {
             if let Some(latched) = self.latch.raise(self.raised.set(), t_s) {
                 let _ = events.push(Event::AlarmRaised(Verdict::of_leaks(latched)));
             }
@@ -885,6 +939,7 @@ mod tests {
             t_s,
             valve_gains_learned: [true; 2],
             u_valve: 0.0,
+            chamber_dp_bar: 20.0,
         }
     }
 
@@ -1562,14 +1617,15 @@ mod tests {
         // Within the tolerance: healthy.
         feed.run(&mut d, &outputs(0.0), 5.0, holding(0.012));
         assert!(d.conclusive() && !shifted(&d));
-        // The loop feeds a flow the filters do not read (0.010 off, 2.3
-        // tolerances beyond): withheld within the 1 s average and 1 s of
-        // CUSUM, never an alarm.
-        feed.run(&mut d, &outputs(0.0), 0.5, holding(0.020));
+        // The loop feeds a flow the filters do not read (0.0055 off, 0.8
+        // tolerances beyond the tolerance, short of the 2 that name a
+        // leak): withheld within the 1 s average and the CUSUM's 1 s,
+        // never an alarm.
+        feed.run(&mut d, &outputs(0.0), 0.5, holding(0.0155));
         assert!(d.conclusive(), "one stretch does not decide");
-        feed.run(&mut d, &outputs(0.0), 1.5, holding(0.020));
+        feed.run(&mut d, &outputs(0.0), 2.5, holding(0.0155));
         assert!(!d.conclusive() && shifted(&d));
-        feed.run(&mut d, &outputs(0.0), 30.0, holding(-0.001));
+        feed.run(&mut d, &outputs(0.0), 30.0, holding(0.0045));
         assert!(!d.conclusive() && shifted(&d), "either side");
         assert!(d.latched().is_empty() && !d.pending());
         // Back at the installation's command: healthy again once the
@@ -1577,6 +1633,61 @@ mod tests {
         // (2 s) has run down.
         feed.run(&mut d, &outputs(0.0), 4.0, holding(0.010));
         assert!(d.conclusive() && !shifted(&d));
+    }
+
+    /// Quiet samples at a hold with the valve command `u` and the piston
+    /// chamber `dp` bar above the rod chamber.
+    fn holding_at(u: f64, dp: f64) -> impl Fn(f64) -> SampleFacts<f64> {
+        move |t| SampleFacts {
+            chamber_dp_bar: dp,
+            ..holding(u)(t)
+        }
+    }
+
+    /// The `both` filter reading `internal` and `external` l/min, each
+    /// ± 0.05 (1σ): above the 0.05 l/min warning level, while the lower
+    /// confidence bound the alarm looks at stays below the 0.08 alarm
+    /// level.
+    fn unconfirmed(internal: f64, external: f64) -> [Option<FilterOutput<f64>>; 4] {
+        outputs(internal).map(|o| {
+            o.map(|o| FilterOutput {
+                flow_external_lpm: external,
+                flow_internal_sd_lpm: 0.05,
+                flow_external_sd_lpm: 0.05,
+                ..o
+            })
+        })
+    }
+
+    #[test]
+    fn a_holding_command_shifted_far_names_the_leak_its_direction_calls_for() {
+        // 0.010 off the installation's 0.010 ± 0.003: 2.3 tolerances
+        // beyond the two that name a leak. Raised once the 1 s average
+        // and the CUSUM have stood there, not at once.
+        let raised = |out: &[Option<FilterOutput<f64>>; 4], u: f64, dp: f64, s: f64| {
+            let mut d: Decision<f64> = Decision::new(&holding_at_0_010());
+            Feed::new().run(&mut d, out, s, holding_at(u, dp));
+            d.latched()
+        };
+        let both = unconfirmed(0.07, 0.07);
+        // Without the shift the readings alone raise nothing.
+        assert!(raised(&both, 0.010, 20.0, 30.0).is_empty());
+        // Towards extending with the piston chamber higher: flow fed into
+        // the chamber an internal leak drains.
+        assert_eq!(raised(&both, 0.020, 20.0, 30.0), LeakSet::INTERNAL);
+        assert!(raised(&both, 0.020, 20.0, 1.0).is_empty(), "too soon");
+        // Towards retracting: into the rod chamber, which only an
+        // external (rod-seal) leak drains.
+        assert_eq!(raised(&both, 0.000, 20.0, 30.0), LeakSet::EXTERNAL);
+        // With the rod chamber higher both leaks call for retracting, and
+        // nothing calls for extending: no leak is named.
+        assert!(raised(&both, 0.000, -5.0, 30.0).is_empty());
+        assert!(raised(&both, 0.020, -5.0, 30.0).is_empty());
+        // Nor one the filters do not read at its warning level: a loop
+        // that stops its piston by friction holds it wherever the
+        // approach left the spool.
+        assert!(raised(&unconfirmed(0.0, 0.07), 0.020, 20.0, 30.0).is_empty());
+        assert!(raised(&unconfirmed(0.07, 0.0), 0.000, 20.0, 30.0).is_empty());
     }
 
     #[test]
