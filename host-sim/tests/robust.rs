@@ -971,3 +971,29 @@ fn a_leak_the_loop_feeds_at_the_holds_is_never_healthy_where_the_filters_miss_it
     assert!(!healthy.iter().any(Status::hold_command_shifted));
     assert_eq!(healthy.last().unwrap().verdict, Verdict::Healthy);
 }
+
+#[test]
+fn a_leak_the_loop_feeds_at_the_holds_is_raised_where_the_filters_read_it_unconfirmed() {
+    // Eleventh survey rig 523 at 100 bar, 25 °C, a 10 s step test with a
+    // 1 l/min external leak from the start: the filters read external
+    // leakage, but never with the confidence the alarm needs (the run
+    // ended `inconclusive`). Before the step the loop holds the piston
+    // with a command on the retracting side of the installation's, far
+    // beyond its tolerance: flow fed into the rod chamber, which only an
+    // external leak drains.
+    let cell = "survey11/rig523/100bar/25C";
+    let leak = quick_run(RigSet::Survey11, 13, &format!("{cell}/step-external-1.00"));
+    let first = alarms(&leak).first().copied();
+    assert!(
+        matches!(first, Some((_, Verdict::External))),
+        "{:?}",
+        alarms(&leak)
+    );
+    let raised_at = leak.iter().position(|s| s.verdict.is_leak()).unwrap();
+    assert!(leak[..raised_at].iter().any(Status::hold_command_shifted));
+    assert_eq!(leak.last().unwrap().verdict, Verdict::External);
+    // The same cell's healthy step test holds with the calibrated command.
+    let healthy = quick_run(RigSet::Survey11, 13, &format!("{cell}/healthy-step"));
+    assert!(alarms(&healthy).is_empty(), "{:?}", alarms(&healthy));
+    assert!(!healthy.iter().any(Status::hold_command_shifted));
+}
