@@ -440,8 +440,11 @@ impl<T: Real> Decision<T> {
     /// Follow the valve command `u` (normalised) at quiet holds: its
     /// average over [`HOLD_AVG_S`] of evidence and a CUSUM of that
     /// average's excess over the tolerance, in tolerances (like the leak
-    /// readings': one outlying stretch cannot decide on its own). Off
-    /// while the tolerance is 0 (`baseline.hold_command_tolerance`).
+    /// readings': one outlying stretch cannot decide on its own); and,
+    /// with the piston chamber `dp` bar above the rod chamber, the leak
+    /// the shift's direction names with a second CUSUM, over
+    /// [`HOLD_ALARM_TOLERANCES`]. Off while the tolerance is 0
+    /// (`baseline.hold_command_tolerance`).
     fn follow_hold_command(&mut self, u: T, dt_w: T, region: usize, weight: T, dp: T) {
         if self.hold_tol <= T::ZERO || !quiet_hold(region, weight) {
             return;
@@ -476,7 +479,13 @@ impl<T: Real> Decision<T> {
     }
 
     /// The leak the holding command names, once its shift has stood
-    /// beyond [`HOLD_ALARM_TOLERANCES`] for [`HOLD_ALARM_S`] of evidence.
+    /// beyond [`HOLD_ALARM_TOLERANCES`] for [`HOLD_ALARM_S`] of evidence
+    /// and the `both` filter reads that leak at its warning level at
+    /// holds. Without that reading the shift is no leak of its own: on
+    /// the survey rigs a loop that stops its piston by friction holds it
+    /// wherever the approach left the spool (a healthy ninth survey rig
+    /// held at 0.009 off its installation's command; internal leaks were
+    /// held on the retracting side right after their onset).
     fn hold_names_leak(&self) -> Option<Leak> {
         self.hold_names.filter(|&k| {
             self.hold_alarm_s >= T::c(HOLD_ALARM_S)
