@@ -33,7 +33,10 @@ fn main() -> anyhow::Result<()> {
         let params = replay_params(params, &spec)?;
         let mut rd = runs.recording(&spec)?;
         let mut m: Monitor<f32> = Monitor::new(&params).map_err(|e| anyhow::anyhow!("{e}"))?;
-        let rows: Vec<_> = std::iter::from_fn(|| rd.next_row().ok().flatten()).collect();
+        let mut rows = Vec::new();
+        while let Some(row) = rd.next_row()? {
+            rows.push(row);
+        }
         let t_end = rows.last().map_or(0.0, |(s, _)| s.t_s);
         let (mut n, mut inc) = (0u32, 0u32);
         let mut with = [0u32; FLAGS.len()];
