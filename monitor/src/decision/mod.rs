@@ -534,6 +534,7 @@ impl<T: Real> Decision<T> {
         let outcome = self.latch.acknowledge(t_ms);
         if let AckOutcome::Cleared(_) = outcome {
             self.persist = PerLeak::splat(T::ZERO);
+            self.hold_alarm_s = T::ZERO;
             self.raised = PerLeak::splat(false);
         }
         outcome
@@ -1697,6 +1698,27 @@ mod tests {
         // approach left the spool.
         assert!(raised(&unconfirmed(0.0, 0.07), 0.020, 20.0, 30.0).is_empty());
         assert!(raised(&unconfirmed(0.07, 0.0), 0.000, 20.0, 30.0).is_empty());
+    }
+
+    #[test]
+    fn a_leak_the_holding_command_raised_is_raised_again_after_an_acknowledge_only_once_it_stands_again(
+    ) {
+        let mut d: Decision<f64> = Decision::new(&holding_at_0_010());
+        let mut feed = Feed::new();
+        let shifted = holding_at(0.020, 20.0);
+        let both = unconfirmed(0.07, 0.07);
+        // Raised once the size average reads the leak at its warning
+        // level (about 5 s); acknowledged after the 10 s hold-off.
+        feed.run(&mut d, &both, 20.0, &shifted);
+        assert_eq!(d.latched(), LeakSet::INTERNAL);
+        let now_ms = (feed.t * 1000.0).round() as u64;
+        let ack = d.acknowledge(now_ms);
+        assert!(matches!(ack, AckOutcome::Cleared(_)), "{ack:?}");
+        // Like the CUSUM's, the holding command's evidence starts over.
+        feed.run(&mut d, &both, 1.0, &shifted);
+        assert!(d.latched().is_empty(), "raised again at once");
+        feed.run(&mut d, &both, 5.0, &shifted);
+        assert_eq!(d.latched(), LeakSet::INTERNAL);
     }
 
     #[test]
