@@ -452,10 +452,14 @@ impl<T: Real> Decision<T> {
         let avg = self.hold_avg.get_or_insert(u);
         follow(avg, (dt_w / T::c(HOLD_AVG_S)).min(T::ONE), u);
         let shift = *avg - self.hold_ref;
-        let excess =
-            ((shift.abs() - self.hold_tol) / self.hold_tol).clamp_to(-T::ONE, T::c(EXCESS_MAX));
-        self.hold_shift_s =
-            (self.hold_shift_s + excess * dt_w).clamp_to(T::ZERO, T::c(2.0 * HOLD_SHIFT_S));
+        // A CUSUM of the shift beyond `tolerances` tolerances, in
+        // tolerances, capped at twice the time that decides.
+        let beyond = |cusum: T, tolerances: f64, cap_s: f64| {
+            let excess = ((shift.abs() - T::c(tolerances) * self.hold_tol) / self.hold_tol)
+                .clamp_to(-T::ONE, T::c(EXCESS_MAX));
+            (cusum + excess * dt_w).clamp_to(T::ZERO, T::c(cap_s))
+        };
+        self.hold_shift_s = beyond(self.hold_shift_s, 1.0, 2.0 * HOLD_SHIFT_S);
         // To hold the piston the loop must feed a leak's flow into the
         // chamber it drains: an external (rod-seal) leak through the
         // retracting side, an internal one into the chamber at the higher
@@ -472,10 +476,7 @@ impl<T: Real> Decision<T> {
             self.hold_names = names;
             self.hold_alarm_s = T::ZERO;
         }
-        let excess = ((shift.abs() - T::c(HOLD_ALARM_TOLERANCES) * self.hold_tol) / self.hold_tol)
-            .clamp_to(-T::ONE, T::c(EXCESS_MAX));
-        self.hold_alarm_s =
-            (self.hold_alarm_s + excess * dt_w).clamp_to(T::ZERO, T::c(2.0 * HOLD_ALARM_S));
+        self.hold_alarm_s = beyond(self.hold_alarm_s, HOLD_ALARM_TOLERANCES, 2.0 * HOLD_ALARM_S);
     }
 
     /// The leak the holding command names, once its shift has stood
