@@ -10,7 +10,7 @@ mod eval_runs;
 
 use eval_runs::{replay_params, EvalRun, EvalRuns};
 use monitor::status::health;
-use monitor::Monitor;
+use monitor::{Monitor, Verdict};
 
 const FLAGS: [(u16, &str); 7] = [
     (health::MODEL_MISMATCH, "mism"),
@@ -40,15 +40,15 @@ fn main() -> anyhow::Result<()> {
         let t_end = rows.last().map_or(0.0, |(s, _)| s.t_s);
         let (mut n, mut inc) = (0u32, 0u32);
         let mut with = [0u32; FLAGS.len()];
-        let mut last = (String::new(), 0u16);
+        let mut last = (Verdict::Inconclusive, 0u16);
         for (s, _) in &rows {
             let st = m.step(s);
-            last = (st.verdict.name().to_string(), st.health);
+            last = (st.verdict, st.health);
             if s.t_s < t_end - 20.0 {
                 continue;
             }
             n += 1;
-            if st.verdict.name() == "inconclusive" {
+            if st.verdict == Verdict::Inconclusive {
                 inc += 1;
                 for (j, (f, _)) in FLAGS.iter().enumerate() {
                     with[j] += (st.health & f != 0) as u32;
@@ -58,7 +58,7 @@ fn main() -> anyhow::Result<()> {
         print!(
             "{:<50} {:>6} {:>5.2}",
             spec.id,
-            &last.0[..last.0.len().min(6)],
+            &last.0.name()[..last.0.name().len().min(6)],
             inc as f64 / n.max(1) as f64
         );
         for w in with {
