@@ -118,6 +118,12 @@ pub const SURVEY11_RIGS: [u64; 48] = consecutive(511);
 /// like the others (reported separately). Disjoint from the other sets.
 pub const SURVEY12_RIGS: [u64; 48] = consecutive(559);
 
+/// Thirteenth survey rigs (seeds 607–654): set aside at the end of the
+/// eighth session of 2026-12-06 and first run, untuned, at the start of
+/// the next, before anything in it was looked at; from then on tuned on
+/// like the others (reported separately). Disjoint from the other sets.
+pub const SURVEY13_RIGS: [u64; 48] = consecutive(607);
+
 /// `N` consecutive seeds from `first`.
 const fn consecutive<const N: usize>(first: u64) -> [u64; N] {
     let mut seeds = [0; N];
@@ -163,13 +169,15 @@ pub enum RigSet {
     Survey11,
     /// [`SURVEY12_RIGS`].
     Survey12,
+    /// [`SURVEY13_RIGS`].
+    Survey13,
 }
 
 impl RigSet {
     /// Every set, in report order: development sets first, held-out last.
     /// A new set goes here too (the report, `--set` and the disjointness
     /// test read this list).
-    pub const ALL: [RigSet; 15] = [
+    pub const ALL: [RigSet; 16] = [
         Self::Dev,
         Self::Wide,
         Self::Survey,
@@ -184,6 +192,7 @@ impl RigSet {
         Self::Survey10,
         Self::Survey11,
         Self::Survey12,
+        Self::Survey13,
         Self::Holdout,
     ];
 
@@ -289,6 +298,12 @@ impl RigSet {
                 "survey12",
                 "Twelfth survey development rigs",
                 "A twelfth survey sample (seeds 559–606), first run untuned at the start of the eighth session of 2026-12-06 (use with `--quick`)",
+            ),
+            Self::Survey13 => (
+                &SURVEY13_RIGS,
+                "survey13",
+                "Thirteenth survey development rigs",
+                "A thirteenth survey sample (seeds 607–654), first run untuned at the start of the first session of 2026-12-07 (use with `--quick`)",
             ),
         };
         SetFacts {
