@@ -19,7 +19,10 @@
 //! from the first such sample the sample is no evidence, and after
 //! [`COMMAND_FAULT_S`] of contradiction of a command that stayed where it
 //! is for [`COMMAND_SETTLE_S`] the command channel is faulted (a hunting
-//! loop's piston lags its swinging command: no evidence, but no fault).
+//! loop's piston lags its swinging command: no evidence, but no fault;
+//! and a closed valve's contradiction faults only a reading within
+//! [`STILL_BAND`] of zero, what a dead input reads: a valve whose null
+//! the calibration did not fit may open inside the kept dead zone).
 //! The contradiction drains ten times slower than it fills, so an open
 //! wire stays a fault through the holds between moves.
 //!
@@ -275,6 +278,11 @@ impl CommandAgreement {
         // Only a command that stayed where it is builds up to a fault; a
         // piston lagging a swinging command is no evidence, but no fault.
         let settled = self.region_s >= COMMAND_SETTLE_S;
+        // And a closed valve's contradiction only from a reading a dead
+        // input can give: a valve whose null the calibration kept opens
+        // at a command of ±0.012 (two thirteenth-survey rigs moved at
+        // 20 mm/s there), no evidence, but no fault.
+        let dead_reading = u.abs() <= STILL_BAND;
         // Net travel while the command sits still near zero (a NaN anchor
         // never compares equal: the first sample re-anchors).
         let xs = self.x_smooth.unwrap_or(x_m);
@@ -291,7 +299,7 @@ impl CommandAgreement {
         let drifting = travel > STILL_SUSPECT_M;
         let dropped_dead = self.still_jumped && self.still_s >= STILL_DEAD_S;
         let contradicted = closed || against || drifting || dropped_dead;
-        if (settled && (closed || against)) || drifting {
+        if (settled && ((closed && dead_reading) || against)) || drifting {
             self.contradiction_s = Real::min(self.contradiction_s + dt_s, COMMAND_MEMORY_S);
         } else if !contradicted {
             self.contradiction_s = Real::max(self.contradiction_s - dt_s / COMMAND_DRAIN, 0.0);
@@ -475,6 +483,29 @@ mod tests {
             let r = c.check(0.05 + 0.01 * t, 0.009, 1e-3);
             assert!(!r.contradicted && !r.faulted, "{k}");
         }
+    }
+
+    #[test]
+    fn a_live_command_inside_a_kept_dead_zone_that_moves_the_piston_is_no_evidence_but_no_fault() {
+        // Calibration kept the reference valve (dead zone 0.015, no null
+        // offset); the rig's valve opens at 0.012, and the loop follows a
+        // slow ramp at 22 mm/s with that steady command (thirteenth survey
+        // rigs 638 and 654, 100 bar): the model's closed valve cannot
+        // explain the motion, but no open wire reads 0.012.
+        let mut c = CommandAgreement::new(0.015, 0.0);
+        let mut contradicted = false;
+        for k in 0..3_000 {
+            let t = k as f32 * 1e-3;
+            let r = c.check(0.04 + 0.022 * t, 0.012, 1e-3);
+            contradicted |= r.contradicted;
+            assert!(!r.faulted, "{k}");
+        }
+        assert!(contradicted);
+        // The same motion with the reading at 0 is the open wire.
+        let mut c = CommandAgreement::new(0.015, 0.0);
+        let faulted =
+            (0..3_000).any(|k| c.check(0.04 + 0.022 * k as f32 * 1e-3, 0.0, 1e-3).faulted);
+        assert!(faulted);
     }
 
     #[test]
