@@ -912,6 +912,11 @@ impl<T: Real> Decision<T> {
         PerLeak::new(flow(Leak::Internal), flow(Leak::External))
     }
 
+    /// Hypothesis `h`'s mean NIS (3 expected).
+    pub fn mean_nis(&self, h: Hypothesis) -> T {
+        self.nis[h as usize]
+    }
+
     /// Evidence per hypothesis.
     pub fn evidence(&self) -> [Evidence; 4] {
         let mut e = [Evidence::default(); 4];
