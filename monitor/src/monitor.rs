@@ -11,7 +11,7 @@ use crate::estimation::bank::{
 };
 use crate::estimation::consistency::NoiseMatch;
 use crate::estimation::model::{Inputs, Plant, Step, BAR, GAIN_REF, LAMINAR_REF, NX, P_REF, X_REF};
-use crate::estimation::quiet::{self, EvidenceWeight, PistonSpeed};
+use crate::estimation::quiet::{self, EvidenceWeight, PistonSpeed, Quietness};
 use crate::hypothesis::Hypothesis;
 use crate::params::{operating_region, ParamError, Params, HOLDING_REGION};
 use crate::physics::fluid::laminar_flow_factor;
@@ -175,12 +175,12 @@ impl<T: Real> Monitor<T> {
             region: HOLDING_REGION,
             speed: PistonSpeed::default(),
             loop_watch: LoopWatch::default(),
-            quiet: EvidenceWeight::new(
+            quiet: EvidenceWeight::new(Quietness::new(
                 f.quiet_rate_bar_s,
                 f.quiet_flow_lpm,
                 f.gain_learning_flow_lpm,
                 f.learning_recovery_s,
-            ),
+            )),
             fluid_ref: params.fluid.clone(),
             matching: NoiseMatch::default(),
         })

@@ -275,14 +275,8 @@ pub struct EvidenceWeight<T> {
 }
 
 impl<T: Real> EvidenceWeight<T> {
-    /// Both views with the [`Quietness::new`] settings.
-    pub fn new(
-        rate_ref_bar_s: f64,
-        flow_ref_lpm: f64,
-        gain_flow_lpm: f64,
-        recovery_s: f64,
-    ) -> Self {
-        let view = Quietness::new(rate_ref_bar_s, flow_ref_lpm, gain_flow_lpm, recovery_s);
+    /// Both views with `view`'s settings.
+    pub fn new(view: Quietness<T>) -> Self {
         Self {
             healthy: view.clone(),
             both: view,
@@ -420,7 +414,7 @@ mod tests {
 
     #[test]
     fn at_rest_a_fitting_both_model_judges_the_plant_in_moves_the_healthy_one() {
-        let mut w = EvidenceWeight::<f64>::new(10.0, 10.0, 2.0, 0.3);
+        let mut w = EvidenceWeight::new(Quietness::<f64>::new(10.0, 10.0, 2.0, 0.3));
         // A hold against a leak: the healthy filter's pressure estimates
         // swing by ±1 bar at 10 Hz (its speed state explains the flow),
         // the `both` filter's sit still.
