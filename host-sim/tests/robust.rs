@@ -992,7 +992,7 @@ fn a_leak_at_the_holds_is_evidence_under_the_model_that_explains_it() {
         "{:?}",
         alarms(&leak)
     );
-    // The holds after the onset count: before, 1 % of the samples after
+    // The holds after the onset count: before, none of the samples after
     // it did (1 ms a sample).
     let after = &leak[30_000..];
     let counted = after.iter().filter(|s| s.quasi_steady()).count();
