@@ -287,8 +287,8 @@ impl CommandAgreement {
         // never compares equal: the first sample re-anchors).
         let xs = self.x_smooth.unwrap_or(x_m);
         let still = (u - self.still_u).abs() <= STILL_TOL;
-        if u.abs() > STILL_BAND || !still {
-            self.still_jumped = u.abs() <= STILL_BAND && (u - self.still_u).abs() > STILL_JUMP;
+        if !dead_reading || !still {
+            self.still_jumped = dead_reading && (u - self.still_u).abs() > STILL_JUMP;
             self.still_s = 0.0;
             self.still_u = u;
             self.still_x_m = xs;
