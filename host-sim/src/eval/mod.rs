@@ -124,6 +124,12 @@ pub const SURVEY12_RIGS: [u64; 48] = consecutive(559);
 /// like the others (reported separately). Disjoint from the other sets.
 pub const SURVEY13_RIGS: [u64; 48] = consecutive(607);
 
+/// Fourteenth survey rigs (seeds 655–702): set aside at the end of the
+/// first session of 2026-12-07 and first run, untuned, at the start of
+/// the next, before anything in it was looked at; from then on tuned on
+/// like the others (reported separately). Disjoint from the other sets.
+pub const SURVEY14_RIGS: [u64; 48] = consecutive(655);
+
 /// `N` consecutive seeds from `first`.
 const fn consecutive<const N: usize>(first: u64) -> [u64; N] {
     let mut seeds = [0; N];
@@ -171,13 +177,15 @@ pub enum RigSet {
     Survey12,
     /// [`SURVEY13_RIGS`].
     Survey13,
+    /// [`SURVEY14_RIGS`].
+    Survey14,
 }
 
 impl RigSet {
     /// Every set, in report order: development sets first, held-out last.
     /// A new set goes here too (the report, `--set` and the disjointness
     /// test read this list).
-    pub const ALL: [RigSet; 16] = [
+    pub const ALL: [RigSet; 17] = [
         Self::Dev,
         Self::Wide,
         Self::Survey,
@@ -193,6 +201,7 @@ impl RigSet {
         Self::Survey11,
         Self::Survey12,
         Self::Survey13,
+        Self::Survey14,
         Self::Holdout,
     ];
 
@@ -304,6 +313,12 @@ impl RigSet {
                 "survey13",
                 "Thirteenth survey development rigs",
                 "A thirteenth survey sample (seeds 607–654), first run untuned at the start of the first session of 2026-12-07 (use with `--quick`)",
+            ),
+            Self::Survey14 => (
+                &SURVEY14_RIGS,
+                "survey14",
+                "Fourteenth survey development rigs",
+                "A fourteenth survey sample (seeds 655–702), first run untuned at the start of the second session of 2026-12-07 (use with `--quick`)",
             ),
         };
         SetFacts {
