@@ -14,7 +14,9 @@
 //! - [`Run`]: a rig, a [`Scenario`], a [`Leak`] and optional [`Fault`]s.
 //! - [`simulate`]: the recording rows at the sample rate, with truth.
 //! - Additions: [`simulate_with_report`] (rows plus how the leaks came
-//!   out: law, coefficients, realised means, passes), [`leak_law`], the
+//!   out: law, coefficients, realised means, passes), [`simulate_reusing`]
+//!   (a run that differs from the last only in its faults takes the
+//!   last's [`Motion`]: the same rows, one physics run fewer), [`leak_law`], the
 //!   public spec structs of every model (fields of [`RigSpec`]), and extra
 //!   [`Truth`] fields (supply and tank pressure, spool, temperature,
 //!   setpoint).
@@ -102,7 +104,7 @@ pub use friction::{FrictionLaw, FrictionSpec};
 pub use leak::LeakLaw;
 pub use load::LoadSpec;
 pub use sensors::{ChannelSpec, SensorSpec};
-pub use sim::{leak_law, simulate_with_report, RunReport};
+pub use sim::{leak_law, simulate_reusing, simulate_with_report, Motion, RunReport};
 pub use supply::SupplySpec;
 pub use valve::ValveSpec;
 

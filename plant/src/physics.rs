@@ -142,9 +142,33 @@ fn axpy(y: &State, k: &State, a: f64) -> State {
     o
 }
 
+/// Where a run's physics stands at the leak's onset: everything before it
+/// is the same whatever the leak coefficients, so the leak calibration's
+/// later passes start here instead of from the pre-roll (bit-identical:
+/// the whole integration state is kept).
+#[derive(Clone, Debug)]
+pub(crate) struct Onset {
+    /// Index of the first leaking step (pre-roll included).
+    k: usize,
+    y: State,
+    ctrl: Controller,
+    profile: Profile,
+    /// The samples recorded before it.
+    out: Vec<Sample>,
+}
+
 /// Run the physics of `rig` through `profile`: one [`Sample`] per
-/// recorded sample (after a pre-roll of [`PRE_ROLL_S`]).
-pub(crate) fn run(rig: &RigSpec, mut profile: Profile, p: &RunPhysics) -> Vec<Sample> {
+/// recorded sample (after a pre-roll of [`PRE_ROLL_S`]); from `resume`
+/// on if given (taken by an earlier run of the same rig, profile and
+/// run physics but for the leak coefficients). Second: the state at the
+/// onset of a leak that starts after the first step (kept by the caller
+/// for the next pass).
+pub(crate) fn run(
+    rig: &RigSpec,
+    profile: Profile,
+    p: &RunPhysics,
+    resume: Option<&Onset>,
+) -> (Vec<Sample>, Option<Onset>) {
     let c = &rig.cylinder;
     let model = Model {
         rig,
@@ -182,14 +206,31 @@ pub(crate) fn run(rig: &RigSpec, mut profile: Profile, p: &RunPhysics) -> Vec<Sa
 
     let nu_ref = rig.fluid.viscosity_cst(crate::REFERENCE_TEMP_C);
     let mut ctrl = Controller::default();
+    let mut profile = profile;
     let mut ripple = Vec::with_capacity(2 * n_fine + 1);
     let ripple_now = |rig: &RigSpec, t: f64| rig.supply.ripple(t);
     let mut out = Vec::with_capacity(n_rows);
-    for k in 0..(n_pre + n_rows) {
+    let mut first = 0;
+    if let Some(r) = resume {
+        (first, y, ctrl, profile) = (r.k, r.y, r.ctrl.clone(), r.profile.clone());
+        out.extend_from_slice(&r.out);
+    }
+    let mut onset = None;
+    for k in first..(n_pre + n_rows) {
         let t = (k as f64 - n_pre as f64) * dt;
         let temp_c = rig.temp_c + p.temp_rate_c_s * t.max(0.0);
         let nu = rig.fluid.viscosity_cst(temp_c);
         let leaking = p.onset_s <= 0.0 || t >= p.onset_s;
+        // (A leak from the start leaks from the pre-roll on: no onset.)
+        if leaking && p.onset_s > 0.0 && resume.is_none() && onset.is_none() {
+            onset = Some(Onset {
+                k,
+                y,
+                ctrl: ctrl.clone(),
+                profile: profile.clone(),
+                out: out.clone(),
+            });
+        }
         let (x_ref, v_ref) = profile.at(t.max(0.0));
         let u = match profile.step {
             Some((ts, a)) if t >= ts => a.clamp(-1.0, 1.0),
@@ -254,13 +295,68 @@ pub(crate) fn run(rig: &RigSpec, mut profile: Profile, p: &RunPhysics) -> Vec<Sa
             }
         }
     }
-    out
+    (out, onset)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::{RigSpec, Scenario};
+
+    /// A pass resumed at the leak's onset is the pass run from the start,
+    /// bit for bit, whatever coefficients the onset was taken under.
+    #[test]
+    fn a_pass_resumed_at_the_onset_is_the_pass_from_the_start() {
+        let rig = RigSpec::random(3, 100.0, 40.0);
+        let profile = Profile::new(&Scenario::ClosedLoop {
+            duration_s: 2.0,
+            seed: 4,
+        });
+        let mut p = RunPhysics {
+            law: LeakLaw::Laminar,
+            c_int: 0.4,
+            c_ext: 0.2,
+            onset_s: 1.2,
+            temp_rate_c_s: 0.005,
+            sample_rate_hz: 1000.0,
+            quiet_step: true,
+        };
+        let (first, onset) = run(&rig, profile.clone(), &p, None);
+        let onset = onset.expect("a leak after the start has an onset");
+        assert_eq!(onset.k, 3000 + 1200);
+        p.c_int = 0.9;
+        p.c_ext = 0.05;
+        let (whole, _) = run(&rig, profile.clone(), &p, None);
+        let (resumed, again) = run(&rig, profile, &p, Some(&onset));
+        assert!(again.is_none());
+        assert_eq!(resumed.len(), whole.len());
+        let bits = |s: &Sample| {
+            [s.x, s.v, s.pa, s.pb, s.ps, s.pt, s.q_int, s.q_ext, s.u].map(f64::to_bits)
+        };
+        assert!(resumed.iter().zip(&whole).all(|(a, b)| bits(a) == bits(b)));
+        // The coefficients matter after the onset only.
+        assert!(first[..1200]
+            .iter()
+            .zip(&whole)
+            .all(|(a, b)| bits(a) == bits(b)));
+        assert!(first[1200..]
+            .iter()
+            .zip(&whole[1200..])
+            .any(|(a, b)| a.q_int != b.q_int));
+        // A leak from the start has no onset to resume at.
+        p.onset_s = 0.0;
+        assert!(run(
+            &rig,
+            Profile::new(&Scenario::ClosedLoop {
+                duration_s: 0.5,
+                seed: 4
+            }),
+            &p,
+            None
+        )
+        .1
+        .is_none());
+    }
 
     /// The doubled step of quiet samples changes nothing that matters.
     #[test]
@@ -280,9 +376,9 @@ mod tests {
                 sample_rate_hz: 1000.0,
                 quiet_step: true,
             };
-            let a = run(&rig, profile.clone(), &p);
+            let (a, _) = run(&rig, profile.clone(), &p, None);
             p.quiet_step = false;
-            let b = run(&rig, profile, &p);
+            let (b, _) = run(&rig, profile, &p, None);
             for (a, b) in a.iter().zip(&b) {
                 assert!((a.x - b.x).abs() < 2e-5, "x {} vs {}", a.x, b.x);
                 assert!((a.pa - b.pa).abs() < 0.05, "pa {} vs {}", a.pa, b.pa);

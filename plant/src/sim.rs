@@ -71,86 +71,145 @@ fn realised(
 
 /// Simulate `run`: the rows and a report on its leaks.
 pub fn simulate_with_report(run: &Run) -> (Vec<Row>, RunReport) {
-    let rig = &run.rig;
-    let profile = Profile::new(&run.scenario);
-    let law = leak_law(run);
-    let dt = 1.0 / run.sample_rate_hz;
-    let mut p = RunPhysics {
-        law,
-        c_int: 0.0,
-        c_ext: 0.0,
-        onset_s: run.leak.onset_s,
-        temp_rate_c_s: temp_rate(run),
-        sample_rate_hz: run.sample_rate_hz,
-        quiet_step: true,
+    let motion = Motion::of(run);
+    (measure(run, &motion.samples), motion.report)
+}
+
+/// Simulate `run`, taking its motion from `last` when `last` moved the
+/// same way (a run that differs only in its faults or the temperature
+/// column: the same physics, other readings), and leaving `run`'s motion
+/// there for the next. The rows are those of [`crate::simulate`].
+pub fn simulate_reusing(run: &Run, last: &mut Option<Motion>) -> Vec<Row> {
+    let motion = match last.take() {
+        Some(m) if m.fits(run) => m,
+        _ => Motion::of(run),
     };
-    let targets = [run.leak.internal_lpm, run.leak.external_lpm];
-    // First guess: the law at a third of the supply pressure.
-    let fluidity =
-        rig.fluid.viscosity_cst(crate::REFERENCE_TEMP_C) / rig.fluid.viscosity_cst(rig.temp_c);
-    let unit = law.shape(0.3 * rig.supply_bar, fluidity);
-    p.c_int = targets[0] / unit;
-    p.c_ext = targets[1] / unit;
-    let mut report = RunReport {
-        law,
-        internal_coeff_lpm: 0.0,
-        external_coeff_lpm: 0.0,
-        realised_internal_lpm: 0.0,
-        realised_external_lpm: 0.0,
-        internal_by_magnitude: false,
-        external_by_magnitude: false,
-        passes: 0,
-        temp_rate_c_s: p.temp_rate_c_s,
-    };
-    let mut previous: [Option<(f64, f64)>; 2] = [None, None];
-    let samples = loop {
-        let samples = physics::run(rig, profile.clone(), &p);
-        report.passes += 1;
-        report.internal_coeff_lpm = p.c_int;
-        report.external_coeff_lpm = p.c_ext;
-        let ri = realised(&samples, p.onset_s, dt, |s| s.q_int);
-        let re = realised(&samples, p.onset_s, dt, |s| s.q_ext);
-        let mut done = true;
-        for (i, (target, got, c)) in [
-            (targets[0], ri, &mut p.c_int),
-            (targets[1], re, &mut p.c_ext),
-        ]
-        .into_iter()
-        .enumerate()
-        {
-            if let (true, Some((value, _))) = (target != 0.0, got) {
-                if (value / target - 1.0).abs() > LEAK_TOLERANCE {
-                    done = false;
-                    // Realised ≈ k·c^α: α from the last two passes (1 at
-                    // first; the leak moves the pressures it depends on).
-                    let alpha = match previous[i] {
-                        Some((c0, v0)) if v0 > 0.0 && value > 0.0 && c0 != *c => {
-                            ((value / v0).ln() / (*c / c0).ln()).clamp(0.3, 2.0)
-                        }
-                        _ => 1.0,
-                    };
-                    previous[i] = Some((*c, value));
-                    *c *= if value.abs() > 1e-9 {
-                        (target / value).powf(1.0 / alpha).clamp(0.05, 20.0)
-                    } else {
-                        10.0
-                    };
+    let rows = measure(run, &motion.samples);
+    *last = Some(motion);
+    rows
+}
+
+/// What a run's physics gave, before the sensors: the true motion and how
+/// its leaks came out.
+#[derive(Clone, Debug)]
+pub struct Motion {
+    /// The run it belongs to, less what only the readings depend on.
+    physics_of: Run,
+    samples: Vec<Sample>,
+    report: RunReport,
+}
+
+impl Motion {
+    /// Whether `run` moves as this motion's run does.
+    pub fn fits(&self, run: &Run) -> bool {
+        self.physics_of == physics_part(run)
+    }
+
+    /// How the leaks came out.
+    pub fn report(&self) -> &RunReport {
+        &self.report
+    }
+
+    /// The physics passes of `run`.
+    fn of(run: &Run) -> Self {
+        let rig = &run.rig;
+        let profile = Profile::new(&run.scenario);
+        let law = leak_law(run);
+        let dt = 1.0 / run.sample_rate_hz;
+        let mut p = RunPhysics {
+            law,
+            c_int: 0.0,
+            c_ext: 0.0,
+            onset_s: run.leak.onset_s,
+            temp_rate_c_s: temp_rate(run),
+            sample_rate_hz: run.sample_rate_hz,
+            quiet_step: true,
+        };
+        let targets = [run.leak.internal_lpm, run.leak.external_lpm];
+        // First guess: the law at a third of the supply pressure.
+        let fluidity =
+            rig.fluid.viscosity_cst(crate::REFERENCE_TEMP_C) / rig.fluid.viscosity_cst(rig.temp_c);
+        let unit = law.shape(0.3 * rig.supply_bar, fluidity);
+        p.c_int = targets[0] / unit;
+        p.c_ext = targets[1] / unit;
+        let mut report = RunReport {
+            law,
+            internal_coeff_lpm: 0.0,
+            external_coeff_lpm: 0.0,
+            realised_internal_lpm: 0.0,
+            realised_external_lpm: 0.0,
+            internal_by_magnitude: false,
+            external_by_magnitude: false,
+            passes: 0,
+            temp_rate_c_s: p.temp_rate_c_s,
+        };
+        let mut previous: [Option<(f64, f64)>; 2] = [None, None];
+        let mut onset = None;
+        let samples = loop {
+            let (samples, at_onset) = physics::run(rig, profile.clone(), &p, onset.as_ref());
+            onset = onset.or(at_onset);
+            report.passes += 1;
+            report.internal_coeff_lpm = p.c_int;
+            report.external_coeff_lpm = p.c_ext;
+            let ri = realised(&samples, p.onset_s, dt, |s| s.q_int);
+            let re = realised(&samples, p.onset_s, dt, |s| s.q_ext);
+            let mut done = true;
+            for (i, (target, got, c)) in [
+                (targets[0], ri, &mut p.c_int),
+                (targets[1], re, &mut p.c_ext),
+            ]
+            .into_iter()
+            .enumerate()
+            {
+                if let (true, Some((value, _))) = (target != 0.0, got) {
+                    if (value / target - 1.0).abs() > LEAK_TOLERANCE {
+                        done = false;
+                        // Realised ≈ k·c^α: α from the last two passes (1 at
+                        // first; the leak moves the pressures it depends on).
+                        let alpha = match previous[i] {
+                            Some((c0, v0)) if v0 > 0.0 && value > 0.0 && c0 != *c => {
+                                ((value / v0).ln() / (*c / c0).ln()).clamp(0.3, 2.0)
+                            }
+                            _ => 1.0,
+                        };
+                        previous[i] = Some((*c, value));
+                        *c *= if value.abs() > 1e-9 {
+                            (target / value).powf(1.0 / alpha).clamp(0.05, 20.0)
+                        } else {
+                            10.0
+                        };
+                    }
                 }
             }
+            if let Some((v, m)) = ri {
+                report.realised_internal_lpm = v;
+                report.internal_by_magnitude = m;
+            }
+            if let Some((v, m)) = re {
+                report.realised_external_lpm = v;
+                report.external_by_magnitude = m;
+            }
+            if done || report.passes >= MAX_PASSES {
+                break samples;
+            }
+        };
+        Self {
+            physics_of: physics_part(run),
+            samples,
+            report,
         }
-        if let Some((v, m)) = ri {
-            report.realised_internal_lpm = v;
-            report.internal_by_magnitude = m;
-        }
-        if let Some((v, m)) = re {
-            report.realised_external_lpm = v;
-            report.external_by_magnitude = m;
-        }
-        if done || report.passes >= MAX_PASSES {
-            break samples;
-        }
-    };
-    (measure(run, &samples), report)
+    }
+}
+
+/// `run` less what only the readings depend on: its faults and whether the
+/// temperature column is written. (Everything else may move the plant: the
+/// noise seed also draws the leak law and the temperature drift.)
+fn physics_part(run: &Run) -> Run {
+    Run {
+        faults: Vec::new(),
+        temp_column: false,
+        ..run.clone()
+    }
 }
 
 /// The recording of `samples` through the rig's sensors, with faults.

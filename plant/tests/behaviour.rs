@@ -106,6 +106,41 @@ fn at_rest_creep_is_bounded_by_the_land_leakage() {
 }
 
 #[test]
+fn a_fault_run_reuses_its_twins_motion_and_reads_the_same() {
+    let twin = run(
+        RigSpec::random(13, 100.0, 25.0),
+        Scenario::ClosedLoop {
+            duration_s: 2.0,
+            seed: 7,
+        },
+        Leak {
+            internal_lpm: 0.0,
+            external_lpm: 0.0,
+            onset_s: 0.0,
+        },
+        3,
+    );
+    let mut faulty = twin.clone();
+    faulty.faults = vec![Fault::OpenWire {
+        channel: Channel::PPiston,
+        at_s: 1.0,
+    }];
+    faulty.temp_column = true;
+    let mut last = None;
+    assert!(simulate_reusing(&twin, &mut last) == simulate(&twin));
+    assert!(last.as_ref().is_some_and(|m| m.fits(&faulty)));
+    assert!(simulate_reusing(&faulty, &mut last) == simulate(&faulty));
+    // Another noise seed draws another leak law and drift: not reused.
+    let mut other = twin.clone();
+    other.noise_seed = 4;
+    assert!(!last.as_ref().unwrap().fits(&other));
+    assert!(simulate_reusing(&other, &mut last) == simulate(&other));
+    assert!(last
+        .as_ref()
+        .is_some_and(|m| m.fits(&other) && !m.fits(&twin)));
+}
+
+#[test]
 fn an_internal_leak_realises_its_requested_mean_flow() {
     for (rig_seed, noise_seed) in [(21, 1), (22, 2)] {
         let leak = Leak {

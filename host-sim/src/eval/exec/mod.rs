@@ -18,7 +18,8 @@ mod recording;
 mod replay;
 
 pub use recording::{
-    cache_key, cache_path, recording_for, recording_text, row_sample, samples_of, TextReader,
+    cache_key, cache_path, recording_for, recording_reusing, recording_text, row_sample,
+    samples_of, TextReader,
 };
 pub use replay::{place, replay_text, truth_summary};
 
@@ -314,10 +315,16 @@ pub fn calibrate_cell(cp: &CellPlan, cfg: &ExecConfig) -> Result<CellResult> {
     })
 }
 
-/// Simulate (or load) and replay one run.
-pub fn execute(spec: &RunSpec, cell: &CellResult, cache: Option<&Path>) -> Result<RunResult> {
+/// Simulate (or load) and replay one run; `motion` as in
+/// [`recording_reusing`].
+fn execute(
+    spec: &RunSpec,
+    cell: &CellResult,
+    cache: Option<&Path>,
+    motion: &mut Option<plant::Motion>,
+) -> Result<RunResult> {
     let start = Instant::now();
-    let (text, cached) = recording_for(spec, cache)?;
+    let (text, cached) = recording_reusing(spec, cache, motion)?;
     let mut r = replay_text(spec, &text, &cell.calibration.params)
         .with_context(|| format!("replaying {}", spec.id))?;
     r.params = cell.calibration.status;
@@ -332,12 +339,15 @@ fn execute_job(
     cache: Option<&Path>,
     done: &dyn Fn(),
 ) -> Result<Vec<RunResult>> {
-    let head = execute(&job.head, cell, cache)?;
+    // The followers of a healthy run are its faults, on its plant: its
+    // motion serves them all.
+    let mut motion = None;
+    let head = execute(&job.head, cell, cache, &mut motion)?;
     done();
     let mut out = Vec::with_capacity(1 + job.followers.len());
     for f in &job.followers {
         let spec = place(f, &head.truth);
-        out.push(execute(&spec, cell, cache)?);
+        out.push(execute(&spec, cell, cache, &mut motion)?);
         done();
     }
     out.insert(0, head);

@@ -229,6 +229,18 @@ fn thread_tag() -> u64 {
 /// The recording text of `spec`: from the cache, or simulated on the plant
 /// (and cached). Second: whether it came from the cache.
 pub fn recording_for(spec: &RunSpec, cache: Option<&Path>) -> Result<(Vec<u8>, bool)> {
+    recording_reusing(spec, cache, &mut None)
+}
+
+/// [`recording_for`], taking the plant's motion from `last` when the run
+/// moves as `last`'s did (a fault run on its healthy twin's plant: only
+/// the readings differ) and leaving this run's there (see
+/// [`plant::simulate_reusing`]). The recording is the same either way.
+pub fn recording_reusing(
+    spec: &RunSpec,
+    cache: Option<&Path>,
+    last: &mut Option<plant::Motion>,
+) -> Result<(Vec<u8>, bool)> {
     let run = spec.run();
     let json = serde_json::to_string(&run)?;
     let path = cache.map(|d| cache_path(d, &json));
@@ -237,16 +249,18 @@ pub fn recording_for(spec: &RunSpec, cache: Option<&Path>) -> Result<(Vec<u8>, b
             return Ok((text, true));
         }
     }
-    let rows = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| plant::simulate(&run)))
-        .map_err(|e| {
-            let msg = e
-                .downcast_ref::<&str>()
-                .map(|s| s.to_string())
-                .or_else(|| e.downcast_ref::<String>().cloned())
-                .unwrap_or_default();
-            anyhow::anyhow!("the plant panicked: {msg}")
-        })
-        .with_context(|| format!("simulating {}", spec.id))?;
+    let rows = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        plant::simulate_reusing(&run, last)
+    }))
+    .map_err(|e| {
+        let msg = e
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| e.downcast_ref::<String>().cloned())
+            .unwrap_or_default();
+        anyhow::anyhow!("the plant panicked: {msg}")
+    })
+    .with_context(|| format!("simulating {}", spec.id))?;
     anyhow::ensure!(!rows.is_empty(), "{}: the plant gave no rows", spec.id);
     let text = recording_text(&run, &json, &rows)?;
     drop(rows);
