@@ -26,13 +26,6 @@ use crate::status::{health, Event, Events, Status, Verdict};
 pub const GAP_PERIODS: f64 = 5.0;
 /// Relative change of the step length that recomputes the spool maps.
 const SPOOL_DT_TOLERANCE: f64 = 1e-6;
-/// The `both` filter's mean NIS (3 expected) up to which its view of a
-/// hold counts for the evidence weight (`quiet::EvidenceWeight`): twice
-/// the expected. A hold whose pressures neither model describes is no
-/// evidence of a leak (twelfth survey rig 595 settled its chambers for
-/// 3 s after a move at a `both` NIS of 7: an external alarm on a healthy
-/// run when its view counted there).
-const BOTH_VIEW_NIS: f64 = 6.0;
 
 /// Derived per-installation constants.
 #[derive(Clone, Debug)]
@@ -315,9 +308,9 @@ impl<T: Real> Monitor<T> {
         self.region = region;
         // At rest the `both` filter's view of the plant counts while its
         // model describes it (its mean NIS from the last sample).
-        self.quiet.count_both(
-            region == HOLDING_REGION
-                && self.decision.mean_nis(Hypothesis::Both) <= T::c(BOTH_VIEW_NIS),
+        self.quiet.judge_both(
+            region == HOLDING_REGION,
+            self.decision.mean_nis(Hypothesis::Both),
         );
         let no_evidence = suspect || pinned;
         let u_valve = T::from_f32(held.u_valve);

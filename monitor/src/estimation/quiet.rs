@@ -136,6 +136,14 @@ impl<T: Real> PistonSpeed<T> {
     }
 }
 
+/// The `both` filter's mean NIS (3 expected) up to which its view of a
+/// hold counts for the evidence weight ([`EvidenceWeight`]): twice the
+/// expected. A hold whose pressures neither model describes is no
+/// evidence of a leak (twelfth survey rig 595 settled its chambers for
+/// 3 s after a move at a `both` NIS of 7: an external alarm on a healthy
+/// run when its view counted there).
+pub const BOTH_VIEW_NIS: f64 = 6.0;
+
 /// Tracks how quasi-steady the plant is.
 #[derive(Clone, Debug)]
 pub struct Quietness<T> {
@@ -147,10 +155,9 @@ pub struct Quietness<T> {
     rates: [T; 3],
     transient: T,
     flow_lpm: T,
-    /// `weight()` and `gain_weight()`, refreshed whenever their inputs
-    /// change (they are read several times a step).
+    /// `weight()`, refreshed whenever its inputs change (it is read
+    /// several times a step; the gain weight once, and of one view only).
     weight: T,
-    gain_weight: T,
 }
 
 impl<T: Real> Quietness<T> {
@@ -174,7 +181,6 @@ impl<T: Real> Quietness<T> {
             transient: T::ZERO,
             flow_lpm: T::ZERO,
             weight: T::ZERO,
-            gain_weight: T::ZERO,
         }
         .refreshed()
     }
@@ -186,7 +192,6 @@ impl<T: Real> Quietness<T> {
 
     fn refresh(&mut self) {
         self.weight = self.compute_weight();
-        self.gain_weight = self.compute_gain_weight();
     }
 
     /// Forget everything (filters restarted): weights 0, rising.
@@ -205,7 +210,13 @@ impl<T: Real> Quietness<T> {
 
     /// The learning weight of the valve flow-gain states.
     pub fn gain_weight(&self) -> T {
-        self.gain_weight
+        let q2 = self.flow_lpm * self.flow_lpm;
+        let transient = if self.rate_ref_bar_s > T::ZERO {
+            self.transient
+        } else {
+            T::ONE
+        };
+        transient * q2 / (q2 + self.gain_flow_lpm * self.gain_flow_lpm)
     }
 
     fn compute_weight(&self) -> T {
@@ -214,16 +225,6 @@ impl<T: Real> Quietness<T> {
         }
         let q = self.flow_lpm / self.flow_ref_lpm;
         self.transient / (T::ONE + q * q)
-    }
-
-    fn compute_gain_weight(&self) -> T {
-        let q2 = self.flow_lpm * self.flow_lpm;
-        let transient = if self.rate_ref_bar_s > T::ZERO {
-            self.transient
-        } else {
-            T::ONE
-        };
-        transient * q2 / (q2 + self.gain_flow_lpm * self.gain_flow_lpm)
     }
 
     /// Update with the estimated chamber pressures (bar), the valve command
@@ -270,7 +271,7 @@ pub struct EvidenceWeight<T> {
     pub healthy: Quietness<T>,
     /// From the `both` filter's estimates.
     pub both: Quietness<T>,
-    /// Whether the `both` view counts (see [`Self::count_both`]).
+    /// Whether the `both` view counts (see [`Self::judge_both`]).
     both_counts: bool,
 }
 
@@ -290,10 +291,11 @@ impl<T: Real> EvidenceWeight<T> {
         self.both.restart();
     }
 
-    /// Let the `both` view count, or not, from this sample on: with the
-    /// piston at rest and the `both` model describing the plant.
-    pub fn count_both(&mut self, counts: bool) {
-        self.both_counts = counts;
+    /// Whether the `both` view counts from this sample on: with the
+    /// piston `at_rest` and the `both` model describing the plant, its
+    /// mean NIS (`both_mean_nis`, 3 expected) at most [`BOTH_VIEW_NIS`].
+    pub fn judge_both(&mut self, at_rest: bool, both_mean_nis: T) {
+        self.both_counts = at_rest && both_mean_nis <= T::c(BOTH_VIEW_NIS);
     }
 
     /// The evidence weight w.
@@ -425,15 +427,17 @@ mod tests {
             w.both.update(33.0, 20.0, -0.003, 0.5, 0.001);
         }
         assert!(w.healthy.weight() < 0.3, "{}", w.healthy.weight());
-        w.count_both(true);
+        w.judge_both(true, BOTH_VIEW_NIS);
         assert!(w.weight() > 0.99, "{}", w.weight());
-        // Moving (or the `both` model not fitting), the healthy view alone
-        // counts, and the gains learn with it.
-        w.count_both(false);
-        assert_eq!(w.weight(), w.healthy.weight());
+        // Moving, or the `both` model not fitting, the healthy view alone
+        // counts; the gains learn with it always.
+        for (at_rest, nis) in [(false, 3.0), (true, BOTH_VIEW_NIS + 0.01), (true, f64::NAN)] {
+            w.judge_both(at_rest, nis);
+            assert_eq!(w.weight(), w.healthy.weight(), "{at_rest} {nis}");
+        }
         assert_eq!(w.gain_weight(), w.healthy.gain_weight());
         w.restart();
-        w.count_both(true);
+        w.judge_both(true, 3.0);
         assert_eq!(w.weight(), 0.0);
     }
 }
