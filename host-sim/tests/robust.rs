@@ -15,6 +15,7 @@ use monitor::physics::valve::HOLD_EDGE_LEAK_SCALE;
 use monitor::status::health;
 use monitor::{Event, Monitor, Params, Status, Verdict};
 use plant::{Channel, Fault, Leak, RigSpec, Run, Scenario};
+use std::ops::RangeBounds;
 
 /// A rig drawn from `seed` at 100 bar, 25 °C, with the nominal crane.
 fn rig(seed: u64) -> RigSpec {
@@ -61,6 +62,23 @@ fn alarms(st: &[Status]) -> Vec<(f64, Verdict)> {
             })
         })
         .collect()
+}
+
+/// The run raised no alarm.
+#[track_caller]
+fn assert_silent(st: &[Status]) {
+    let raised = alarms(st);
+    assert!(raised.is_empty(), "{raised:?}");
+}
+
+/// The run's first alarm names `verdict` and was raised within `when`, s.
+#[track_caller]
+fn assert_first_alarm(st: &[Status], verdict: Verdict, when: impl RangeBounds<f64>) {
+    let raised = alarms(st);
+    assert!(
+        matches!(raised.first(), Some(&(t, v)) if v == verdict && when.contains(&t)),
+        "first alarm {verdict:?} expected: {raised:?}"
+    );
 }
 
 fn closed_loop(seconds: f64) -> Scenario {
@@ -157,7 +175,7 @@ fn position_spikes_are_a_sensor_fault_never_a_leak() {
         }],
     );
     let st = statuses(&run);
-    assert!(alarms(&st).is_empty(), "{:?}", alarms(&st));
+    assert_silent(&st);
     assert_eq!(st.last().unwrap().verdict, Verdict::SensorFault);
     let outliers = st
         .iter()
@@ -177,7 +195,7 @@ fn an_open_valve_command_wire_is_a_sensor_fault_never_a_leak() {
         }],
     );
     let st = statuses(&run);
-    assert!(alarms(&st).is_empty(), "{:?}", alarms(&st));
+    assert_silent(&st);
     let first_fault = st
         .iter()
         .find(|s| s.t_s > 20.0 && s.verdict == Verdict::SensorFault)
@@ -208,7 +226,7 @@ fn an_open_valve_command_wire_during_slow_moves_is_a_sensor_fault_never_a_leak()
         .fold(0.0, f64::max);
     assert!(vmax < 0.02, "not a slow-motion run: {vmax} m/s");
     let st = statuses(&run);
-    assert!(alarms(&st).is_empty(), "{:?}", alarms(&st));
+    assert_silent(&st);
     assert!(st.iter().all(|s| !s.verdict.is_leak()));
     assert_eq!(st.last().unwrap().verdict, Verdict::SensorFault);
 }
@@ -238,7 +256,7 @@ fn an_open_valve_command_wire_at_a_hold_is_a_sensor_fault_never_a_leak() {
         "the piston moves"
     );
     let st: Vec<Status> = rows.iter().map(|r| m.step(&row_sample(r))).collect();
-    assert!(alarms(&st).is_empty(), "{:?}", alarms(&st));
+    assert_silent(&st);
     assert!(st.iter().all(|s| !s.verdict.is_leak()));
     assert_eq!(st.last().unwrap().verdict, Verdict::SensorFault);
 }
@@ -276,7 +294,7 @@ fn stuck_or_nan_time_is_inconclusive_never_healthy() {
 fn random_noise_is_never_healthy_nor_a_leak() {
     let run = plant_run(rig(4), closed_loop(20.0), vec![Fault::RandomNoise]);
     let st = statuses(&run);
-    assert!(alarms(&st).is_empty(), "{:?}", alarms(&st));
+    assert_silent(&st);
     let healthy = st.iter().filter(|s| s.verdict == Verdict::Healthy).count();
     assert_eq!(healthy, 0);
 }
@@ -475,7 +493,7 @@ fn with_the_laminar_factor_held_a_lost_oil_temperature_is_a_sensor_fault_never_a
         at_s: 30.0,
     }];
     let st = statuses_with(&run, &cal.params);
-    assert!(alarms(&st).is_empty(), "{:?}", alarms(&st));
+    assert_silent(&st);
     let (before, after): (Vec<&Status>, Vec<&Status>) = st.iter().partition(|s| s.t_s < 30.0);
     assert!(before.iter().all(|s| s.verdict != Verdict::SensorFault));
     assert_eq!(before.last().unwrap().verdict, Verdict::Healthy);
@@ -566,12 +584,7 @@ fn a_step_test_leak_the_alarm_once_waited_on_is_raised_at_the_hold_before_the_st
     // raised there.
     let (rows, mut m, _) = development_run("dev/rig5/100bar/40C/step-external-0.50");
     let st: Vec<Status> = rows.iter().map(|r| m.step(&row_sample(r))).collect();
-    let first = alarms(&st).first().copied();
-    assert!(
-        matches!(first, Some((t, Verdict::External)) if t < 3.0),
-        "{:?}",
-        alarms(&st)
-    );
+    assert_first_alarm(&st, Verdict::External, ..3.0);
     assert_eq!(st.last().unwrap().verdict, Verdict::External);
 }
 
@@ -585,7 +598,7 @@ fn a_long_hold_that_only_the_both_filter_reads_as_a_leak_raises_no_alarm() {
     // but with its own coefficient below the healthy baseline: it backs
     // no leak, and the alarm raised at 94.6 s was false.
     let st = quick_survey_run(9, "survey/rig39/50bar/25C/long-hold");
-    assert!(alarms(&st).is_empty(), "{:?}", alarms(&st));
+    assert_silent(&st);
     // With the rod-side edges calibrated the `both` filter's reading no
     // longer stands above the level (it did, unsupported, and the verdict
     // was `inconclusive`): the healthy hold is `healthy`.
@@ -602,7 +615,7 @@ fn a_warm_up_at_equal_chamber_pressures_teaches_no_internal_leak() {
     // held where it cannot be seen — in this run and in the calibration of
     // the cell — it raises none.
     let st = quick_survey_run(46, "survey/rig76/100bar/40C/healthy-1");
-    assert!(alarms(&st).is_empty(), "{:?}", alarms(&st));
+    assert_silent(&st);
 }
 
 #[test]
@@ -794,7 +807,7 @@ fn an_installation_nobody_calibrated_is_never_healthy_and_alarms_on_gross_leaks_
     let provisional = Params::provisional();
     let gross = provisional.baseline.provisional_floor_lpm;
     let healthy = statuses_with(&plant_run(rig(4), closed_loop(40.0), vec![]), &provisional);
-    assert!(alarms(&healthy).is_empty(), "{:?}", alarms(&healthy));
+    assert_silent(&healthy);
     assert!(healthy.iter().all(|s| s.verdict == Verdict::Inconclusive));
     assert!(healthy[20_000..]
         .iter()
@@ -950,12 +963,7 @@ fn a_leak_at_the_hold_before_a_step_test_is_seen_where_the_holds_land_leakage_is
     let (rows, mut m, cal) = development_run("dev/rig3/50bar/40C/step-external-0.50");
     assert_eq!(cal.params.valve.hold_edge_leak_scale, HOLD_EDGE_LEAK_SCALE);
     let st: Vec<Status> = rows.iter().map(|r| m.step(&row_sample(r))).collect();
-    let first = alarms(&st).first().copied();
-    assert!(
-        matches!(first, Some((t, Verdict::External)) if t < 3.0),
-        "{:?}",
-        alarms(&st)
-    );
+    assert_first_alarm(&st, Verdict::External, ..3.0);
     assert_eq!(st.last().unwrap().verdict, Verdict::External);
 }
 
@@ -969,7 +977,7 @@ fn a_leak_the_loop_feeds_at_the_holds_is_never_healthy_where_the_filters_miss_it
     let cell = "survey9/rig424/50bar/40C";
     let leak = quick_run(RigSet::Survey9, 10, &format!("{cell}/step-internal-1.00"));
     assert!(leak.iter().any(Status::hold_command_shifted));
-    assert!(alarms(&leak).is_empty(), "{:?}", alarms(&leak));
+    assert_silent(&leak);
     assert_eq!(leak.last().unwrap().verdict, Verdict::Inconclusive);
     // The same cell's healthy step test holds with the calibrated command.
     let healthy = quick_run(RigSet::Survey9, 10, &format!("{cell}/healthy-step"));
@@ -986,12 +994,7 @@ fn a_leak_at_the_holds_is_evidence_under_the_model_that_explains_it() {
     // ended `inconclusive` without an alarm.
     let cell = "survey10/rig467/100bar/25C";
     let leak = quick_run(RigSet::Survey10, 5, &format!("{cell}/external-0.50-on30"));
-    let first = alarms(&leak).first().copied();
-    assert!(
-        matches!(first, Some((t, Verdict::External)) if (30.0..35.0).contains(&t)),
-        "{:?}",
-        alarms(&leak)
-    );
+    assert_first_alarm(&leak, Verdict::External, 30.0..35.0);
     // The holds after the onset count: before, none of the samples after
     // it did (1 ms a sample).
     let after = &leak[30_000..];
@@ -1003,7 +1006,7 @@ fn a_leak_at_the_holds_is_evidence_under_the_model_that_explains_it() {
     );
     // The same cell's healthy run stays silent.
     let healthy = quick_run(RigSet::Survey10, 5, &format!("{cell}/healthy-1"));
-    assert!(alarms(&healthy).is_empty(), "{:?}", alarms(&healthy));
+    assert_silent(&healthy);
 }
 
 #[test]
@@ -1017,17 +1020,12 @@ fn a_leak_the_loop_feeds_at_the_holds_is_raised_where_the_filters_read_it_unconf
     // external leak drains.
     let cell = "survey11/rig523/100bar/25C";
     let leak = quick_run(RigSet::Survey11, 13, &format!("{cell}/step-external-1.00"));
-    let first = alarms(&leak).first().copied();
-    assert!(
-        matches!(first, Some((_, Verdict::External))),
-        "{:?}",
-        alarms(&leak)
-    );
+    assert_first_alarm(&leak, Verdict::External, ..);
     let raised_at = leak.iter().position(|s| s.verdict.is_leak()).unwrap();
     assert!(leak[..raised_at].iter().any(Status::hold_command_shifted));
     assert_eq!(leak.last().unwrap().verdict, Verdict::External);
     // The same cell's healthy step test holds with the calibrated command.
     let healthy = quick_run(RigSet::Survey11, 13, &format!("{cell}/healthy-step"));
-    assert!(alarms(&healthy).is_empty(), "{:?}", alarms(&healthy));
+    assert_silent(&healthy);
     assert!(!healthy.iter().any(Status::hold_command_shifted));
 }
