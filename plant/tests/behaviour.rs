@@ -14,6 +14,16 @@ fn run(rig: RigSpec, scenario: Scenario, leak: Leak, noise_seed: u64) -> Run {
     }
 }
 
+const NO_LEAK: Leak = Leak {
+    internal_lpm: 0.0,
+    external_lpm: 0.0,
+    onset_s: 0.0,
+};
+
+fn closed_loop(duration_s: f64, seed: u64) -> Scenario {
+    Scenario::ClosedLoop { duration_s, seed }
+}
+
 fn rest(duration_s: f64) -> Scenario {
     Scenario::StepTest {
         duration_s,
@@ -26,15 +36,8 @@ fn rest(duration_s: f64) -> Scenario {
 fn runs_are_deterministic_and_seeds_matter() {
     let r = run(
         RigSpec::random(11, 50.0, 25.0),
-        Scenario::ClosedLoop {
-            duration_s: 3.0,
-            seed: 5,
-        },
-        Leak {
-            internal_lpm: 0.0,
-            external_lpm: 0.0,
-            onset_s: 0.0,
-        },
+        closed_loop(3.0, 5),
+        NO_LEAK,
         9,
     );
     let a = simulate(&r);
@@ -109,15 +112,8 @@ fn at_rest_creep_is_bounded_by_the_land_leakage() {
 fn a_fault_run_reuses_its_twins_motion_and_reads_the_same() {
     let twin = run(
         RigSpec::random(13, 100.0, 25.0),
-        Scenario::ClosedLoop {
-            duration_s: 2.0,
-            seed: 7,
-        },
-        Leak {
-            internal_lpm: 0.0,
-            external_lpm: 0.0,
-            onset_s: 0.0,
-        },
+        closed_loop(2.0, 7),
+        NO_LEAK,
         3,
     );
     let mut faulty = twin.clone();
