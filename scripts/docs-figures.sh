@@ -33,7 +33,7 @@
 #   survey      host-sim eval --set survey --quick (48 survey
 #               development rigs)                                → docs/evaluation.md (~20 min; 3 from the cache)
 #   surveyN     host-sim eval --set surveyN --quick, N = 2–14 (48 rigs
-#               of the Nth survey each)                          → docs/evaluation.md (~10 min each; 3 from the cache)
+#               of the Nth survey each)                          → docs/evaluation.md (~7 min each; 3 from the cache)
 #   dev-full    host-sim eval --set dev (full matrix, 522 runs)  → docs/evaluation.md (~15 min or more)
 # A block that has never been regenerated says so and names the commit its
 # figures were measured at; running its producer replaces that note.
