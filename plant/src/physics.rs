@@ -165,7 +165,7 @@ pub(crate) struct Onset {
 /// for the next pass).
 pub(crate) fn run(
     rig: &RigSpec,
-    profile: Profile,
+    mut profile: Profile,
     p: &RunPhysics,
     resume: Option<&Onset>,
 ) -> (Vec<Sample>, Option<Onset>) {
@@ -206,7 +206,6 @@ pub(crate) fn run(
 
     let nu_ref = rig.fluid.viscosity_cst(crate::REFERENCE_TEMP_C);
     let mut ctrl = Controller::default();
-    let mut profile = profile;
     let mut ripple = Vec::with_capacity(2 * n_fine + 1);
     let ripple_now = |rig: &RigSpec, t: f64| rig.supply.ripple(t);
     let mut out = Vec::with_capacity(n_rows);

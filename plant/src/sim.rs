@@ -105,11 +105,6 @@ impl Motion {
         self.physics_of == physics_part(run)
     }
 
-    /// How the leaks came out.
-    pub fn report(&self) -> &RunReport {
-        &self.report
-    }
-
     /// The physics passes of `run`.
     fn of(run: &Run) -> Self {
         let rig = &run.rig;
@@ -164,20 +159,9 @@ impl Motion {
                 if let (true, Some((value, _))) = (target != 0.0, got) {
                     if (value / target - 1.0).abs() > LEAK_TOLERANCE {
                         done = false;
-                        // Realised ≈ k·c^α: α from the last two passes (1 at
-                        // first; the leak moves the pressures it depends on).
-                        let alpha = match previous[i] {
-                            Some((c0, v0)) if v0 > 0.0 && value > 0.0 && c0 != *c => {
-                                ((value / v0).ln() / (*c / c0).ln()).clamp(0.3, 2.0)
-                            }
-                            _ => 1.0,
-                        };
+                        let next = next_coefficient(*c, value, target, previous[i]);
                         previous[i] = Some((*c, value));
-                        *c *= if value.abs() > 1e-9 {
-                            (target / value).powf(1.0 / alpha).clamp(0.05, 20.0)
-                        } else {
-                            10.0
-                        };
+                        *c = next;
                     }
                 }
             }
@@ -198,6 +182,24 @@ impl Motion {
             samples,
             report,
         }
+    }
+}
+
+/// The next pass's leak coefficient after coefficient `c` realised `value`
+/// (l/min) against `target`, with `previous` (coefficient, value) of the
+/// pass before. Realised ≈ k·c^α: α from the last two passes (1 at first;
+/// the leak moves the pressures it depends on).
+fn next_coefficient(c: f64, value: f64, target: f64, previous: Option<(f64, f64)>) -> f64 {
+    let alpha = match previous {
+        Some((c0, v0)) if v0 > 0.0 && value > 0.0 && c0 != c => {
+            ((value / v0).ln() / (c / c0).ln()).clamp(0.3, 2.0)
+        }
+        _ => 1.0,
+    };
+    c * if value.abs() > 1e-9 {
+        (target / value).powf(1.0 / alpha).clamp(0.05, 20.0)
+    } else {
+        10.0
     }
 }
 
