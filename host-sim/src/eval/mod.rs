@@ -130,6 +130,12 @@ pub const SURVEY13_RIGS: [u64; 48] = consecutive(607);
 /// like the others (reported separately). Disjoint from the other sets.
 pub const SURVEY14_RIGS: [u64; 48] = consecutive(655);
 
+/// Fifteenth survey rigs (seeds 703–750): set aside at the end of the
+/// second session of 2026-12-07 and first run, untuned, at the start of
+/// the next, before anything in it was looked at; from then on tuned on
+/// like the others (reported separately). Disjoint from the other sets.
+pub const SURVEY15_RIGS: [u64; 48] = consecutive(703);
+
 /// `N` consecutive seeds from `first`.
 const fn consecutive<const N: usize>(first: u64) -> [u64; N] {
     let mut seeds = [0; N];
@@ -179,13 +185,15 @@ pub enum RigSet {
     Survey13,
     /// [`SURVEY14_RIGS`].
     Survey14,
+    /// [`SURVEY15_RIGS`].
+    Survey15,
 }
 
 impl RigSet {
     /// Every set, in report order: development sets first, held-out last.
     /// A new set goes here too (the report, `--set` and the disjointness
     /// test read this list).
-    pub const ALL: [RigSet; 17] = [
+    pub const ALL: [RigSet; 18] = [
         Self::Dev,
         Self::Wide,
         Self::Survey,
@@ -202,6 +210,7 @@ impl RigSet {
         Self::Survey12,
         Self::Survey13,
         Self::Survey14,
+        Self::Survey15,
         Self::Holdout,
     ];
 
@@ -319,6 +328,12 @@ impl RigSet {
                 "survey14",
                 "Fourteenth survey development rigs",
                 "A fourteenth survey sample (seeds 655–702), first run untuned at the start of the second session of 2026-12-07 (use with `--quick`)",
+            ),
+            Self::Survey15 => (
+                &SURVEY15_RIGS,
+                "survey15",
+                "Fifteenth survey development rigs",
+                "A fifteenth survey sample (seeds 703–750), first run untuned at the start of the third session of 2026-12-07 (use with `--quick`)",
             ),
         };
         SetFacts {
