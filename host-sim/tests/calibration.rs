@@ -339,7 +339,9 @@ fn calibrated_monitor_detects_a_leak_on_the_other_rig() {
     };
     let run = common::run_with(sc, rig, &cal.params);
     let t = run.first_alarm.expect("leak detected").0;
-    assert!(t > 20.0 && t < 25.0, "alarm at {t}");
+    // A leak that starts in a move after a hold that read clear is raised
+    // at the next hold where it flows (5.5 s after the onset here).
+    assert!(t > 20.0 && t < 27.0, "alarm at {t}");
     assert_eq!(run.final_status.verdict, Verdict::Internal);
 }
 
@@ -408,25 +410,21 @@ fn a_valve_read_back_that_changes_scale_is_never_taken_for_the_valve() {
             CalibrationError::PoorFit { .. } | CalibrationError::ValidationFailed { .. }
         )
     };
-    // From 45 s the first two thirds fit a valve and the held-out third
-    // contradicts it: refused.
-    let e = scaled_from(45.0).unwrap_err();
-    assert!(refused(&e), "{e}");
-    // From 30 s no part fits a valve: refused, or (as now) a partial
-    // calibration that keeps the reference valve, says why, and raises
-    // the detection floor of the moves, where the valve meters, well above
-    // the alarm level (the holds' own readings stay low: a move's reading
-    // carried into a hold is the move's).
-    match scaled_from(30.0) {
-        Err(e) => assert!(refused(&e), "{e}"),
+    // Refused, or (as now) a partial calibration that keeps the reference
+    // valve, says why, and raises the detection floor of the moves, where
+    // the valve meters, well above the alarm level (the holds' own
+    // readings stay low: a move's reading carried into a hold is the
+    // move's).
+    let never_the_valve = |from_s: f64| match scaled_from(from_s) {
+        Err(e) => assert!(refused(&e), "from {from_s} s: {e}"),
         Ok(c) => {
-            assert!(c.partial);
+            assert!(c.partial, "from {from_s} s");
             assert!(
                 c.warnings
                     .iter()
                     .any(|w| w.starts_with("valve not fitted (kept)")
                         && w.contains("does not follow the command as a valve's does")),
-                "{:?}",
+                "from {from_s} s: {:?}",
                 c.warnings
             );
             let b = &c.params.baseline;
@@ -440,15 +438,23 @@ fn a_valve_read_back_that_changes_scale_is_never_taken_for_the_valve() {
                 [
                     reference.flow_gain_extend_lpm_sqrt_bar,
                     reference.flow_gain_retract_lpm_sqrt_bar
-                ]
+                ],
+                "from {from_s} s"
             );
             let moves = [
                 b.region_floor_internal_lpm[0],
                 b.region_floor_internal_lpm[2],
             ];
-            assert!(moves.iter().all(|f| *f > 0.3), "{b:?}");
+            assert!(moves.iter().all(|f| *f > 0.3), "from {from_s} s: {b:?}");
         }
-    }
+    };
+    // From 45 s the first two thirds fit a valve and the held-out third
+    // contradicts it: that valve is refused (its validation alarmed until
+    // a move no longer raised a leak the last hold read clear; the partial
+    // calibration, valve kept, now passes its own check).
+    never_the_valve(45.0);
+    // From 30 s no part fits a valve.
+    never_the_valve(30.0);
 }
 
 /// Share of the samples after the warm-up at which the monitor with
