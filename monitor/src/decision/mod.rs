@@ -19,10 +19,10 @@
 //!    reading that appears in a move right after a hold that read nothing
 //!    is more likely the valve model's error at that opening than a leak,
 //!    and a leak shows at the next hold. The same excess where the model
-//!    probabilities do not
-//!    support the leak is a contradiction, counted apart: reaching the
-//!    debounce time it makes the verdict `inconclusive`
-//!    ([`Decision::conclusive`]), never `healthy`. Raised leaks go to the
+//!    probabilities do not support the leak is a contradiction, counted
+//!    apart: reaching the debounce time it makes the verdict
+//!    `inconclusive` ([`Decision::conclusive`]), never `healthy`. Raised
+//!    leaks go to the
 //!    one leak-alarm latch ([`latch`]): they stay until acknowledged,
 //!    and a new leak while one is latched escalates (internal + external
 //!    = both); with one leak raised, the other must also read more than
@@ -761,7 +761,7 @@ impl<T: Real> Decision<T> {
                 T::ZERO
             };
             let level = self.level_now[k].max(share);
-            let own = self.fast_lower[k] - self.carried[k];
+            let own = self.own_reading(k);
             let excess = ((own - level) / level).clamp_to(-T::ONE, T::c(EXCESS_MAX));
             // The excess counts for the alarm where the probabilities
             // support the leak, and as a contradiction where they do not.
@@ -784,6 +784,12 @@ impl<T: Real> Decision<T> {
         new_leak
     }
 
+    /// Leak `k`'s reading of the current operating region, l/min: the
+    /// fast average less 2σ, less what the regions before still carry.
+    fn own_reading(&self, k: Leak) -> T {
+        self.fast_lower[k] - self.carried[k]
+    }
+
     /// Whether the last hold read each leak clear: judged once the hold
     /// (`region`) has [`HOLD_CLEAR_EVIDENCE_S`] of evidence, at samples
     /// where the plant shows the leaks (`observable`), and kept through
@@ -796,8 +802,8 @@ impl<T: Real> Decision<T> {
         self.hold_ev_s += dt_w;
         if observable && self.hold_ev_s >= T::c(HOLD_CLEAR_EVIDENCE_S) {
             for k in Leak::ALL {
-                let own = self.fast_lower[k] - self.carried[k];
-                self.hold_clear[k] = own < T::c(HOLD_CLEAR_SHARE) * self.level_now[k];
+                self.hold_clear[k] =
+                    self.own_reading(k) < T::c(HOLD_CLEAR_SHARE) * self.level_now[k];
             }
         }
     }
