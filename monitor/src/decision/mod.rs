@@ -22,10 +22,10 @@
 //!    probabilities do not support the leak is a contradiction, counted
 //!    apart: reaching the debounce time it makes the verdict
 //!    `inconclusive` ([`Decision::conclusive`]), never `healthy`. Raised
-//!    leaks go to the
-//!    one leak-alarm latch ([`latch`]): they stay until acknowledged,
-//!    and a new leak while one is latched escalates (internal + external
-//!    = both); with one leak raised, the other must also read more than
+//!    leaks go to the one leak-alarm latch ([`latch`]): they stay until
+//!    acknowledged, and a new leak while one is latched escalates
+//!    (internal + external = both); with one leak raised, the other must
+//!    also read more than
 //!    [`CROSS_TALK`] × its flow (the model's error shares flow between
 //!    the two). While no hypothesis fits (mean NIS of the best filter
 //!    above [`MISMATCH_NIS`]) the CUSUMs hold: the leak states then take
@@ -110,7 +110,8 @@ use latch::{AckOutcome, Latch};
 /// leaks a move saw first wait for the hold (figures: docs/evaluation.md,
 /// third session of 2026-12-07). Clearing below half the level did as
 /// well or slightly worse; letting a move raise the leak on four times
-/// the evidence instead kept half the false alarms.
+/// the evidence instead removed only 4 of the 11 false alarms on the
+/// twelfth to fifteenth surveys (this rule 8).
 const HOLD_CLEAR_SHARE: f64 = 0.25;
 /// Evidence time a hold must have before its reading clears a leak, s:
 /// the first tenths of a second of a hold still settle from the move.
