@@ -136,6 +136,12 @@ pub const SURVEY14_RIGS: [u64; 48] = consecutive(655);
 /// like the others (reported separately). Disjoint from the other sets.
 pub const SURVEY15_RIGS: [u64; 48] = consecutive(703);
 
+/// Sixteenth survey rigs (seeds 751–798): set aside at the end of the
+/// third session of 2026-12-07 and first run, untuned, at the start of
+/// the next, before anything in it was looked at; from then on tuned on
+/// like the others (reported separately). Disjoint from the other sets.
+pub const SURVEY16_RIGS: [u64; 48] = consecutive(751);
+
 /// `N` consecutive seeds from `first`.
 const fn consecutive<const N: usize>(first: u64) -> [u64; N] {
     let mut seeds = [0; N];
@@ -187,13 +193,15 @@ pub enum RigSet {
     Survey14,
     /// [`SURVEY15_RIGS`].
     Survey15,
+    /// [`SURVEY16_RIGS`].
+    Survey16,
 }
 
 impl RigSet {
     /// Every set, in report order: development sets first, held-out last.
     /// A new set goes here too (the report, `--set` and the disjointness
     /// test read this list).
-    pub const ALL: [RigSet; 18] = [
+    pub const ALL: [RigSet; 19] = [
         Self::Dev,
         Self::Wide,
         Self::Survey,
@@ -211,6 +219,7 @@ impl RigSet {
         Self::Survey13,
         Self::Survey14,
         Self::Survey15,
+        Self::Survey16,
         Self::Holdout,
     ];
 
@@ -334,6 +343,12 @@ impl RigSet {
                 "survey15",
                 "Fifteenth survey development rigs",
                 "A fifteenth survey sample (seeds 703–750), first run untuned at the start of the third session of 2026-12-07 (use with `--quick`)",
+            ),
+            Self::Survey16 => (
+                &SURVEY16_RIGS,
+                "survey16",
+                "Sixteenth survey development rigs",
+                "A sixteenth survey sample (seeds 751–798), first run untuned at the start of the fourth session of 2026-12-07 (use with `--quick`)",
             ),
         };
         SetFacts {
