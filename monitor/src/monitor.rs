@@ -591,8 +591,8 @@ mod tests {
 
     /// A monitor whose retracting region alarms external leaks only from
     /// 0.68 l/min, run for 2 s with the command just past the dead zone
-    /// toward retracting and the piston at `speed_m_s`; returns the last
-    /// sample's region and external alarm level.
+    /// toward retracting and the piston at `speed_m_s` from mid-stroke;
+    /// returns the last sample's region and external alarm level.
     fn region_and_level_at(speed_m_s: f64) -> (usize, f32) {
         let mut p = Params::nominal();
         p.baseline.region_floor_external_lpm = [0.68, 0.0, 0.0];
@@ -603,8 +603,12 @@ mod tests {
             let t = i as f64 * 1e-3;
             let mut s = good_sample(t);
             s.u_valve = Some(u);
-            s.x_piston_m = Some((0.2 - speed_m_s * t) as f32);
-            level = m.step(&s).alarm_level_lpm[1];
+            // Inside the 0.18 m stroke: a reading beyond it is a sensor
+            // fault, and a faulted sample keeps the region it had.
+            s.x_piston_m = Some((0.1 - speed_m_s * t) as f32);
+            let status = m.step(&s);
+            assert_eq!(status.faulted_channels, 0, "at {t} s");
+            level = status.alarm_level_lpm[1];
         }
         (m.region(), level)
     }
