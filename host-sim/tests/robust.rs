@@ -239,7 +239,7 @@ fn an_open_valve_command_wire_at_a_hold_is_a_sensor_fault_never_a_leak() {
     // an external leak 0.9 s after the wire opened; the command that
     // jumped to 0 and sits still is no evidence now.
     let config = PlanConfig {
-        sets: vec![RigSet::Survey7],
+        sets: vec![RigSet::survey(7)],
         rigs: Some(26),
         quick: true,
         ..PlanConfig::default()
@@ -353,7 +353,7 @@ fn planned_run(config: &PlanConfig, id: &str) -> (Vec<plant::Row>, Monitor<f32>,
 /// The statuses of run `id` of the survey's `--quick` matrix over its
 /// first `rigs` rigs, its cell calibrated as `host-sim eval` does it.
 fn quick_survey_run(rigs: usize, id: &str) -> Vec<Status> {
-    quick_run(RigSet::Survey, rigs, id)
+    quick_run(RigSet::survey(1), rigs, id)
 }
 
 /// The statuses of run `id` of `set`'s `--quick` matrix over its first
@@ -975,12 +975,12 @@ fn a_leak_the_loop_feeds_at_the_holds_is_never_healthy_where_the_filters_miss_it
     // the loop must feed the leak through the valve, with a command away
     // from the one the cell's calibration recording held it with.
     let cell = "survey9/rig424/50bar/40C";
-    let leak = quick_run(RigSet::Survey9, 10, &format!("{cell}/step-internal-1.00"));
+    let leak = quick_run(RigSet::survey(9), 10, &format!("{cell}/step-internal-1.00"));
     assert!(leak.iter().any(Status::hold_command_shifted));
     assert_silent(&leak);
     assert_eq!(leak.last().unwrap().verdict, Verdict::Inconclusive);
     // The same cell's healthy step test holds with the calibrated command.
-    let healthy = quick_run(RigSet::Survey9, 10, &format!("{cell}/healthy-step"));
+    let healthy = quick_run(RigSet::survey(9), 10, &format!("{cell}/healthy-step"));
     assert!(!healthy.iter().any(Status::hold_command_shifted));
     assert_eq!(healthy.last().unwrap().verdict, Verdict::Healthy);
 }
@@ -993,7 +993,7 @@ fn a_leak_at_the_holds_is_evidence_under_the_model_that_explains_it() {
     // view alone the evidence weight fell from 0.95 to 0.01 and the run
     // ended `inconclusive` without an alarm.
     let cell = "survey10/rig467/100bar/25C";
-    let leak = quick_run(RigSet::Survey10, 5, &format!("{cell}/external-0.50-on30"));
+    let leak = quick_run(RigSet::survey(10), 5, &format!("{cell}/external-0.50-on30"));
     assert_first_alarm(&leak, Verdict::External, 30.0..35.0);
     // The holds after the onset count: before, none of the samples after
     // it did (1 ms a sample).
@@ -1005,7 +1005,7 @@ fn a_leak_at_the_holds_is_evidence_under_the_model_that_explains_it() {
         after.len()
     );
     // The same cell's healthy run stays silent.
-    let healthy = quick_run(RigSet::Survey10, 5, &format!("{cell}/healthy-1"));
+    let healthy = quick_run(RigSet::survey(10), 5, &format!("{cell}/healthy-1"));
     assert_silent(&healthy);
 }
 
@@ -1019,13 +1019,17 @@ fn a_leak_the_loop_feeds_at_the_holds_is_raised_where_the_filters_read_it_unconf
     // beyond its tolerance: flow fed into the rod chamber, which only an
     // external leak drains.
     let cell = "survey11/rig523/100bar/25C";
-    let leak = quick_run(RigSet::Survey11, 13, &format!("{cell}/step-external-1.00"));
+    let leak = quick_run(
+        RigSet::survey(11),
+        13,
+        &format!("{cell}/step-external-1.00"),
+    );
     assert_first_alarm(&leak, Verdict::External, ..);
     let raised_at = leak.iter().position(|s| s.verdict.is_leak()).unwrap();
     assert!(leak[..raised_at].iter().any(Status::hold_command_shifted));
     assert_eq!(leak.last().unwrap().verdict, Verdict::External);
     // The same cell's healthy step test holds with the calibrated command.
-    let healthy = quick_run(RigSet::Survey11, 13, &format!("{cell}/healthy-step"));
+    let healthy = quick_run(RigSet::survey(11), 13, &format!("{cell}/healthy-step"));
     assert_silent(&healthy);
     assert!(!healthy.iter().any(Status::hold_command_shifted));
 }
