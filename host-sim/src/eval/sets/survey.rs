@@ -194,30 +194,15 @@ mod tests {
 
     #[test]
     fn the_texts_read_as_they_were_written_out() {
-        let s = RigSet::survey(1);
-        assert_eq!((s.name(), s.title()), ("survey", "Survey development rigs"));
-        assert_eq!(
-            s.about(),
-            "A larger sample of development rigs (seeds 31–78), for rare failures (use with `--quick`)"
-        );
-        let s = RigSet::survey(8);
-        assert_eq!(
-            (s.name(), s.title()),
-            ("survey8", "Eighth survey development rigs")
-        );
-        assert_eq!(
-            s.about(),
-            "An eighth survey sample (seeds 367–414), first run untuned at the start of the fourth session of 2026-12-06 (use with `--quick`)"
-        );
-        let s = RigSet::survey(16);
-        assert_eq!(
-            (s.name(), s.title()),
-            ("survey16", "Sixteenth survey development rigs")
-        );
-        assert_eq!(
-            s.about(),
-            "A sixteenth survey sample (seeds 751–798), first run untuned at the start of the fourth session of 2026-12-07 (use with `--quick`)"
-        );
+        let expected = [
+            (1, "survey", "Survey development rigs", "A larger sample of development rigs (seeds 31–78), for rare failures (use with `--quick`)"),
+            (8, "survey8", "Eighth survey development rigs", "An eighth survey sample (seeds 367–414), first run untuned at the start of the fourth session of 2026-12-06 (use with `--quick`)"),
+            (16, "survey16", "Sixteenth survey development rigs", "A sixteenth survey sample (seeds 751–798), first run untuned at the start of the fourth session of 2026-12-07 (use with `--quick`)"),
+        ];
+        for (n, name, title, about) in expected {
+            let s = RigSet::survey(n);
+            assert_eq!((s.name(), s.title(), s.about()), (name, title, about));
+        }
     }
 
     #[test]
