@@ -1,110 +1,38 @@
-//! [`RigSet`] in serde: by its name, exactly as the derived
-//! implementation of the enum of unit variants it once was wrote and read
-//! it (`"dev"`, `"survey2"`, …, the same errors), so that JSON written
-//! before the surveys became one table still reads back. The survey
-//! names are not literals any more, hence no derive.
+//! [`RigSet`] in serde: by its name (`"dev"`, `"survey2"`, …), the
+//! strings the JSON's `set` has always held, with the error an unknown
+//! name always gave. The survey names are not literals, hence no derive:
+//! serde goes through [`RigSet::name`] and [`RigSet::ALL`].
 
-use super::{RigSet, SurveyNo};
-use serde::de::{self, Deserializer, EnumAccess, Unexpected, VariantAccess, Visitor};
-use serde::{Deserialize, Serialize, Serializer};
-use std::fmt;
-use std::sync::LazyLock;
+use super::RigSet;
 
-/// Every set in the order of the old enum's variants (dev, holdout, wide,
-/// then the surveys): a set's place is its variant index.
-fn declared() -> impl Iterator<Item = RigSet> {
-    [RigSet::Dev, RigSet::Holdout, RigSet::Wide]
-        .into_iter()
-        .chain((1..=SurveyNo::COUNT).map(|n| RigSet::survey(n as u8)))
-}
-
-/// The sets' names in [`declared`] order (serde's list of variants).
-static NAMES: LazyLock<Vec<&'static str>> =
-    LazyLock::new(|| declared().map(RigSet::name).collect());
-
-impl RigSet {
-    /// Index of the set's variant in the old enum.
-    fn variant_index(self) -> u32 {
-        match self {
-            Self::Dev => 0,
-            Self::Holdout => 1,
-            Self::Wide => 2,
-            Self::Survey(n) => 2 + u32::from(n.get()),
-        }
+impl From<RigSet> for &'static str {
+    fn from(set: RigSet) -> Self {
+        set.name()
     }
 }
 
-impl Serialize for RigSet {
-    fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
-        serializer.serialize_unit_variant("RigSet", self.variant_index(), self.name())
-    }
-}
+impl TryFrom<String> for RigSet {
+    type Error = String;
 
-impl<'de> Deserialize<'de> for RigSet {
-    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
-        deserializer.deserialize_enum("RigSet", &NAMES, SetVisitor)
-    }
-}
-
-/// Reads a unit variant of `RigSet`.
-struct SetVisitor;
-
-impl<'de> Visitor<'de> for SetVisitor {
-    type Value = RigSet;
-
-    fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
-        f.write_str("enum RigSet")
-    }
-
-    fn visit_enum<A: EnumAccess<'de>>(self, data: A) -> Result<RigSet, A::Error> {
-        let (Variant(set), variant) = data.variant()?;
-        variant.unit_variant()?;
-        Ok(set)
-    }
-}
-
-/// A variant's identifier: its name, or its index.
-struct Variant(RigSet);
-
-impl<'de> Deserialize<'de> for Variant {
-    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
-        deserializer
-            .deserialize_identifier(VariantVisitor)
-            .map(Variant)
-    }
-}
-
-/// Reads a [`Variant`].
-struct VariantVisitor;
-
-impl<'de> Visitor<'de> for VariantVisitor {
-    type Value = RigSet;
-
-    fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
-        f.write_str("variant identifier")
-    }
-
-    fn visit_u64<E: de::Error>(self, index: u64) -> Result<RigSet, E> {
-        usize::try_from(index)
-            .ok()
-            .and_then(|i| declared().nth(i))
-            .ok_or_else(|| {
-                let expected = format!("variant index 0 <= i < {}", NAMES.len());
-                E::invalid_value(Unexpected::Unsigned(index), &expected.as_str())
-            })
-    }
-
-    fn visit_str<E: de::Error>(self, name: &str) -> Result<RigSet, E> {
-        declared()
+    fn try_from(name: String) -> Result<Self, String> {
+        RigSet::ALL
+            .into_iter()
             .find(|set| set.name() == name)
-            .ok_or_else(|| E::unknown_variant(name, &NAMES))
-    }
-
-    fn visit_bytes<E: de::Error>(self, name: &[u8]) -> Result<RigSet, E> {
-        match std::str::from_utf8(name) {
-            Ok(name) => self.visit_str(name),
-            Err(_) => Err(E::unknown_variant(&String::from_utf8_lossy(name), &NAMES)),
-        }
+            .ok_or_else(|| {
+                // In the order the derive listed them: dev, holdout, the rest.
+                let (fixed, rest): (Vec<_>, Vec<_>) = RigSet::ALL
+                    .into_iter()
+                    .partition(|s| matches!(s, RigSet::Dev | RigSet::Holdout));
+                let known: Vec<_> = [fixed, rest]
+                    .concat()
+                    .into_iter()
+                    .map(|s| format!("`{}`", s.name()))
+                    .collect();
+                format!(
+                    "unknown variant `{name}`, expected one of {}",
+                    known.join(", ")
+                )
+            })
     }
 }
 
@@ -119,8 +47,6 @@ mod tests {
             assert_eq!(json, format!("\"{}\"", set.name()));
             assert_eq!(serde_json::from_str::<RigSet>(&json).unwrap(), set);
         }
-        assert_eq!(NAMES.len(), RigSet::ALL.len());
-        assert_eq!(&NAMES[..5], ["dev", "holdout", "wide", "survey", "survey2"]);
     }
 
     #[test]

@@ -8,6 +8,8 @@
 mod by_name;
 mod survey;
 
+use serde::{Deserialize, Serialize};
+
 pub use survey::SurveyNo;
 
 /// Development rigs: the plant seeds the monitor may be looked at and tuned
@@ -31,7 +33,8 @@ pub const WIDE_RIGS: [u64; 24] = [
 
 /// A set of rigs. Serialized by its name ([`RigSet::name`]: `"dev"`,
 /// `"survey2"`, …), as the JSON's `set` has always been written.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(into = "&'static str", try_from = "String")]
 pub enum RigSet {
     /// [`DEV_RIGS`].
     Dev,
