@@ -18,8 +18,7 @@
 //!    excess does not count toward its alarm ([`HOLD_CLEAR_SHARE`]): a
 //!    reading that appears in a move right after a hold that read nothing
 //!    is more likely the valve model's error at that opening than a leak,
-//!    and a leak shows at the next hold (a hold counts through blips of
-//!    the region too short to be a move). The same excess where the model
+//!    and a leak shows at the next hold. The same excess where the model
 //!    probabilities do not support the leak is a contradiction, counted
 //!    apart: reaching the debounce time it makes the verdict
 //!    `inconclusive` ([`Decision::conclusive`]), never `healthy`. Raised
@@ -117,16 +116,6 @@ const HOLD_CLEAR_SHARE: f64 = 0.25;
 /// Evidence time a hold must have before its reading clears a leak, s:
 /// the first tenths of a second of a hold still settle from the move.
 const HOLD_CLEAR_EVIDENCE_S: f64 = 1.0;
-/// Evidence time of a move, s, that ends the hold before it: a shorter
-/// one is a blip of the region (a piston held with a command just past
-/// the dead zone, whose speed reading crosses the at-rest limit now and
-/// then), and the hold's evidence time goes on through it. Without it
-/// such a hold never reached [`HOLD_CLEAR_EVIDENCE_S`], and its leak
-/// waited in vain for a hold to be raised at (survey rig 669). On twelve
-/// sets: no false or early alarm more or less, 4 more leaks detected and
-/// 7 more isolated (docs/evaluation.md, fourth and fifth sessions of
-/// 2026-12-07).
-const HOLD_BLIP_EVIDENCE_S: f64 = 0.25;
 /// Mean NIS of the best filter above which the model is flagged as not
 /// fitting (χ²₃ has mean 3).
 const MISMATCH_NIS: f64 = 30.0;
@@ -262,12 +251,8 @@ pub struct Decision<T> {
     slow_sd: PerLeak<T>,
     /// CUSUM per leak, s of evidence time.
     persist: PerLeak<T>,
-    /// Evidence time in the current hold, s, up to
-    /// [`HOLD_CLEAR_EVIDENCE_S`].
+    /// Evidence time in the current hold, s.
     hold_ev_s: T,
-    /// Evidence time in the current move, s, up to
-    /// [`HOLD_BLIP_EVIDENCE_S`].
-    move_ev_s: T,
     /// Per leak: the last hold with enough evidence read it clear (below
     /// [`HOLD_CLEAR_SHARE`] of its level): a move's reading then does not
     /// raise it.
@@ -389,7 +374,6 @@ impl<T: Real> Decision<T> {
             slow_sd: PerLeak::splat(T::ZERO),
             persist: PerLeak::splat(T::ZERO),
             hold_ev_s: T::ZERO,
-            move_ev_s: T::ZERO,
             hold_clear: PerLeak::splat(false),
             raised: PerLeak::splat(false),
             unsupported: PerLeak::splat(T::ZERO),
@@ -448,7 +432,6 @@ impl<T: Real> Decision<T> {
         self.slow_sd = PerLeak::splat(T::ZERO);
         self.persist = PerLeak::splat(T::ZERO);
         self.hold_ev_s = T::ZERO;
-        self.move_ev_s = T::ZERO;
         self.hold_clear = PerLeak::splat(false);
         self.raised = PerLeak::splat(false);
         self.unsupported = PerLeak::splat(T::ZERO);
@@ -808,28 +791,20 @@ impl<T: Real> Decision<T> {
         self.fast_lower[k] - self.carried[k]
     }
 
-    /// Whether the last hold read each leak clear: judged on the whole
-    /// reading once the hold (`region`) has [`HOLD_CLEAR_EVIDENCE_S`] of
-    /// evidence, counted through blips of the region shorter than
-    /// [`HOLD_BLIP_EVIDENCE_S`], at samples where the plant shows the
-    /// leaks (`observable`), and kept through the moves after it.
+    /// Whether the last hold read each leak clear: judged once the hold
+    /// (`region`) has [`HOLD_CLEAR_EVIDENCE_S`] of evidence, at samples
+    /// where the plant shows the leaks (`observable`), and kept through
+    /// the moves after it.
     fn track_hold(&mut self, region: usize, dt_w: T, observable: bool) {
         if region != HOLDING_REGION {
-            self.move_ev_s = (self.move_ev_s + dt_w).min(T::c(HOLD_BLIP_EVIDENCE_S));
-            if self.move_ev_s >= T::c(HOLD_BLIP_EVIDENCE_S) {
-                self.hold_ev_s = T::ZERO;
-            }
+            self.hold_ev_s = T::ZERO;
             return;
         }
-        self.move_ev_s = T::ZERO;
-        self.hold_ev_s = (self.hold_ev_s + dt_w).min(T::c(HOLD_CLEAR_EVIDENCE_S));
-        // The whole reading: after a second of the hold's evidence what a
-        // move carried in is gone (2 %), while a blip of the region hands
-        // the reading to `carried` each time.
+        self.hold_ev_s += dt_w;
         if observable && self.hold_ev_s >= T::c(HOLD_CLEAR_EVIDENCE_S) {
             for k in Leak::ALL {
                 self.hold_clear[k] =
-                    self.fast_lower[k] < T::c(HOLD_CLEAR_SHARE) * self.level_now[k];
+                    self.own_reading(k) < T::c(HOLD_CLEAR_SHARE) * self.level_now[k];
             }
         }
     }
@@ -1408,33 +1383,6 @@ mod tests {
         feed.run(&mut d, &outputs(3.0 * level), 2.0, steady);
         assert!(d.latched().contains(Leak::Internal));
         assert!(!d.hold_clear.internal());
-    }
-
-    #[test]
-    fn a_hold_its_region_blips_out_of_is_judged_on_its_whole_reading() {
-        let p = Params::nominal();
-        let level = p.alarm.alarm_lpm;
-        let mut d: Decision<f64> = Decision::new(&p);
-        let mut feed = Feed::new();
-        feed.run(&mut d, &outputs(0.0), 3.0, steady);
-        assert!(d.hold_clear.internal());
-        // A piston held with a command just past the dead zone: its speed
-        // reading puts it in a move for 20 ms every 0.3 s. Each blip hands
-        // the reading to `carried`, and no stretch of the hold reaches a
-        // second of evidence on its own.
-        let blipping = |t: f64| {
-            let region = if t % 0.3 < 0.02 {
-                crate::params::EXTENDING_REGION
-            } else {
-                HOLDING_REGION
-            };
-            facts(0.001, 1.0, true, region, t)
-        };
-        feed.run(&mut d, &outputs(2.0 * level), 3.0, blipping);
-        assert!(
-            !d.hold_clear.internal(),
-            "the clearance from before the leak stands"
-        );
     }
 
     #[test]
