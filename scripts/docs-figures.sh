@@ -32,8 +32,8 @@
 #               development rigs)                                → docs/evaluation.md (~6 min; 2 from the cache)
 #   survey      host-sim eval --set survey --quick (48 survey
 #               development rigs)                                → docs/evaluation.md (~20 min; 3 from the cache)
-#   surveyN     host-sim eval --set surveyN --quick, N = 2–17 (48 rigs
-#               of the Nth survey each)                          → docs/evaluation.md (~7 min each; 3 from the cache)
+#   surveyN     host-sim eval --set surveyN --quick, N ≥ 2 (the
+#               Nth survey's 48 rigs; host-sim eval --help)      → docs/evaluation.md (~7 min each; 3 from the cache)
 #   dev-full    host-sim eval --set dev (full matrix, 522 runs)  → docs/evaluation.md (~15 min or more)
 # A block that has never been regenerated says so and names the commit its
 # figures were measured at; running its producer replaces that note.
@@ -267,7 +267,7 @@ for p in "${producers[@]}"; do
     dev-full) eval_block dev-full --set dev ;;
     size) fig_size ;;
     bench) fig_bench ;;
-    *) echo "unknown producer: $p (examples golden throughput eval size bench holdout wide survey survey2 … survey17 dev-full)"; exit 2 ;;
+    *) echo "unknown producer: $p (examples golden throughput eval size bench holdout wide survey surveyN dev-full; surveyN: see host-sim eval --help)"; exit 2 ;;
   esac
 done
 step "done: review with git diff README.md docs/"

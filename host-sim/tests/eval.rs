@@ -766,3 +766,25 @@ fn every_rig_set_is_a_set_choice_by_its_name() {
     assert_eq!(both.sets(), vec![RigSet::Dev, RigSet::Holdout]);
     assert!(SetChoice::from_str("survey99", false).is_err());
 }
+
+#[test]
+fn the_cli_reference_lists_every_set_choice_in_help_order() {
+    use clap::ValueEnum;
+    // docs/cli.md restates `--set`'s choices: a new survey must appear
+    // there too, in the order `--help` gives.
+    let names: Vec<String> = SetChoice::value_variants()
+        .iter()
+        .filter_map(|c| c.to_possible_value())
+        .map(|v| v.get_name().to_string())
+        .collect();
+    let expected = format!("host-sim eval [--set {}] ", names.join("|"));
+    let docs = include_str!("../../docs/cli.md");
+    let line = docs
+        .lines()
+        .find(|l| l.starts_with("host-sim eval "))
+        .expect("docs/cli.md has the eval synopsis");
+    assert!(
+        line.starts_with(&expected),
+        "{line}\nexpected it to start with\n{expected}"
+    );
+}
