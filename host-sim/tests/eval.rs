@@ -745,16 +745,22 @@ fn where_the_time_goes() {
     }
 }
 
+/// `--set`'s choices by name, in `--help` order.
+fn set_choice_names() -> Vec<String> {
+    use clap::ValueEnum;
+    SetChoice::value_variants()
+        .iter()
+        .filter_map(|c| c.to_possible_value())
+        .map(|v| v.get_name().to_string())
+        .collect()
+}
+
 #[test]
 fn every_rig_set_is_a_set_choice_by_its_name() {
     use clap::ValueEnum;
     // `--set` takes each set of `RigSet::ALL` by its name, once, and
     // `both`; nothing else.
-    let names: Vec<String> = SetChoice::value_variants()
-        .iter()
-        .filter_map(|c| c.to_possible_value())
-        .map(|v| v.get_name().to_string())
-        .collect();
+    let names = set_choice_names();
     assert_eq!(names.len(), RigSet::ALL.len() + 1, "{names:?}");
     for set in RigSet::ALL {
         let choice = SetChoice::from_str(set.name(), false)
@@ -769,15 +775,9 @@ fn every_rig_set_is_a_set_choice_by_its_name() {
 
 #[test]
 fn the_cli_reference_lists_every_set_choice_in_help_order() {
-    use clap::ValueEnum;
     // docs/cli.md restates `--set`'s choices: a new survey must appear
     // there too, in the order `--help` gives.
-    let names: Vec<String> = SetChoice::value_variants()
-        .iter()
-        .filter_map(|c| c.to_possible_value())
-        .map(|v| v.get_name().to_string())
-        .collect();
-    let expected = format!("host-sim eval [--set {}] ", names.join("|"));
+    let expected = format!("host-sim eval [--set {}] ", set_choice_names().join("|"));
     let docs = include_str!("../../docs/cli.md");
     let line = docs
         .lines()
