@@ -3,7 +3,7 @@
 //! name always gave. The survey names are not literals, hence no derive:
 //! serde goes through [`RigSet::name`] and [`RigSet::ALL`].
 
-use super::RigSet;
+use super::{RigSet, SetChoice};
 
 impl From<RigSet> for &'static str {
     fn from(set: RigSet) -> Self {
@@ -19,14 +19,14 @@ impl TryFrom<String> for RigSet {
             .into_iter()
             .find(|set| set.name() == name)
             .ok_or_else(|| {
-                // In the order the derive listed them: dev, holdout, the rest.
-                let (fixed, rest): (Vec<_>, Vec<_>) = RigSet::ALL
-                    .into_iter()
-                    .partition(|s| matches!(s, RigSet::Dev | RigSet::Holdout));
-                let known: Vec<_> = [fixed, rest]
-                    .concat()
-                    .into_iter()
-                    .map(|s| format!("`{}`", s.name()))
+                // In `--set`'s order (dev, holdout, the rest), the order
+                // the derive listed them in.
+                let known: Vec<_> = SetChoice::ALL
+                    .iter()
+                    .filter_map(|choice| match choice {
+                        SetChoice::One(set) => Some(format!("`{}`", set.name())),
+                        SetChoice::Both => None,
+                    })
                     .collect();
                 format!(
                     "unknown variant `{name}`, expected one of {}",
