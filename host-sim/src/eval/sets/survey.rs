@@ -41,6 +41,7 @@ const SURVEYS: &[SurveyFacts] = &[
     later("fifteenth", "at the start of the third session of 2026-12-07"),
     later("sixteenth", "at the start of the fourth session of 2026-12-07"),
     later("seventeenth", "at the start of the fifth session of 2026-12-07"),
+    later("eighteenth", "at the start of the sixth session of 2026-12-07"),
 ];
 
 /// Rigs in a survey.
@@ -200,6 +201,7 @@ mod tests {
             (8, "survey8", "Eighth survey development rigs", "An eighth survey sample (seeds 367–414), first run untuned at the start of the fourth session of 2026-12-06 (use with `--quick`)"),
             (16, "survey16", "Sixteenth survey development rigs", "A sixteenth survey sample (seeds 751–798), first run untuned at the start of the fourth session of 2026-12-07 (use with `--quick`)"),
             (17, "survey17", "Seventeenth survey development rigs", "A seventeenth survey sample (seeds 799–846), first run untuned at the start of the fifth session of 2026-12-07 (use with `--quick`)"),
+            (18, "survey18", "Eighteenth survey development rigs", "An eighteenth survey sample (seeds 847–894), first run untuned at the start of the sixth session of 2026-12-07 (use with `--quick`)"),
         ];
         for (n, name, title, about) in expected {
             let s = RigSet::survey(n);
