@@ -421,7 +421,8 @@ impl<T: Real> Decision<T> {
         }
     }
 
-    /// Forget the evidence (filters restarted); a latched alarm stays.
+    /// Forget the evidence (filters restarted); a latched alarm and what
+    /// the last hold read clear stay.
     pub fn restart(&mut self) {
         self.loglik = [T::ZERO; 4];
         self.nis = [T::c(NIS_START); 4];
@@ -432,7 +433,9 @@ impl<T: Real> Decision<T> {
         self.slow_sd = PerLeak::splat(T::ZERO);
         self.persist = PerLeak::splat(T::ZERO);
         self.hold_ev_s = T::ZERO;
-        self.hold_clear = PerLeak::splat(false);
+        // What the last hold read stays: the plant's leaks did not change
+        // with the filters' restart (a gap, a sensor fault), and a move's
+        // reading right after it is judged as after any hold.
         self.raised = PerLeak::splat(false);
         self.unsupported = PerLeak::splat(T::ZERO);
         self.backed = PerLeak::splat(true);
@@ -1361,6 +1364,26 @@ mod tests {
         // 3 s of evidence reading nothing: however long, however large.
         assert_eq!(move_alarm_after_hold(&p, 1.0, 3.0 * level), None);
         assert_eq!(move_alarm_after_hold(&p, 1.0, 10.0 * level), None);
+    }
+
+    #[test]
+    fn a_clear_hold_still_counts_after_the_filters_restart() {
+        let p = Params::nominal();
+        let level = p.alarm.alarm_lpm;
+        let mut d: Decision<f64> = Decision::new(&p);
+        let mut feed = Feed::new();
+        feed.run(&mut d, &outputs(0.0), 3.0, steady);
+        assert!(d.hold_clear.internal());
+        // A data gap in a slow move restarts the filters; the move's
+        // reading after it is the valve model's error the hold before
+        // read clear, not a leak that began in the gap.
+        d.restart();
+        let retracting = |t| facts(0.001, 1.0, true, 0, t);
+        feed.run(&mut d, &outputs(3.0 * level), 8.0, retracting);
+        assert!(d.latched().is_empty(), "{:?}", d.latched());
+        // A leak it is: the next hold raises it.
+        feed.run(&mut d, &outputs(3.0 * level), 2.0, steady);
+        assert!(d.latched().contains(Leak::Internal));
     }
 
     #[test]
