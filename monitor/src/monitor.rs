@@ -65,6 +65,9 @@ pub struct Monitor<T: Real = f32> {
     cfg: Config<T>,
     checker: SampleChecker,
     bank: Option<Bank<T>>,
+    /// The bank's plant states are stale (a gap in the samples): the next
+    /// valid sample restarts them and keeps what the filters learned.
+    stale: bool,
     last_t: Option<f64>,
     /// The steps the spool maps are for: within ±1e-6 of the step they
     /// were computed for; a step outside needs new spool maps.
@@ -158,6 +161,7 @@ impl<T: Real> Monitor<T> {
             cfg,
             checker: SampleChecker::new(params),
             bank: None,
+            stale: false,
             last_t: None,
             since_start_s: 0.0,
             warming: true,
@@ -229,7 +233,8 @@ impl<T: Real> Monitor<T> {
         };
         self.last_t = Some(sample.t_s);
         if exceeds(dt, self.cfg.gap_bits) && self.bank.is_some() {
-            self.bank = None;
+            // The plant moved on in the gap; its valve and leaks did not.
+            self.stale = true;
             self.held = None;
             self.checker.break_pressure_sequence();
             self.loop_watch.break_window();
@@ -239,7 +244,8 @@ impl<T: Real> Monitor<T> {
 
         let Some(c) = checked.values else {
             // A required channel is faulted: no estimation. Filters restart
-            // from fresh readings once every channel is back.
+            // from fresh readings once every channel is back (what they
+            // learned may hold a faulty reading: it goes too).
             self.bank = None;
             self.held = None;
             self.checker.break_pressure_sequence();
@@ -268,21 +274,28 @@ impl<T: Real> Monitor<T> {
             u_valve: c.u_valve,
         };
         let held = self.held.replace(now).unwrap_or(now);
-        let Some(bank) = self.bank.as_mut() else {
-            let s0 = initial_state(&m, c.u_valve);
-            self.bank = Some(Bank::new(&s0, &self.cfg.p0, self.cfg.leak_prior_sd));
-            self.since_start_s = 0.0;
-            self.warming = true;
-            self.decision.restart();
-            self.quiet.restart();
-            self.speed.restart();
-            self.matching.restart();
-            return self.status(
-                sample.t_s,
-                checked.faulted,
-                flags | health::WARMING_UP,
-                events,
-            );
+        let bank = match self.bank.as_mut() {
+            Some(bank) if !self.stale => bank,
+            _ => {
+                let s0 = initial_state(&m, c.u_valve);
+                match self.bank.as_mut() {
+                    Some(stale) => stale.restart_plant(&s0, &self.cfg.p0),
+                    None => self.bank = Some(Bank::new(&s0, &self.cfg.p0, self.cfg.leak_prior_sd)),
+                }
+                self.stale = false;
+                self.since_start_s = 0.0;
+                self.warming = true;
+                self.decision.restart();
+                self.quiet.restart();
+                self.speed.restart();
+                self.matching.restart();
+                return self.status(
+                    sample.t_s,
+                    checked.faulted,
+                    flags | health::WARMING_UP,
+                    events,
+                );
+            }
         };
 
         // dt > 0 here (`elapsed`, or the nominal period).
@@ -611,6 +624,74 @@ mod tests {
             level = status.alarm_level_lpm[1];
         }
         (m.region(), level)
+    }
+
+    /// Learned states per filter: nuisance and leak (from `NX` on), up to
+    /// five, zero-padded.
+    type Learned = [([f64; 5], [[f64; 5]; 5]); 4];
+
+    /// Every filter's nuisance and leak states and their covariance block.
+    fn learned(m: &Monitor<f64>) -> Learned {
+        let states = m.filter_states().expect("the bank runs");
+        core::array::from_fn(|h| {
+            let f = &states[h];
+            let n = f.x.len();
+            let mut x = [0.0; 5];
+            let mut p = [[0.0; 5]; 5];
+            for j in NX..n {
+                x[j - NX] = f.x[j];
+                for i in NX..n {
+                    p[j - NX][i - NX] = f.p[j * n + i];
+                }
+            }
+            (x, p)
+        })
+    }
+
+    #[test]
+    fn a_gap_restarts_the_plant_states_and_keeps_what_the_filters_learned() {
+        let p = Params::nominal();
+        let mut m = Monitor::<f64>::new(&p).unwrap();
+        // At rest, with transmitter noise (readings that never change are
+        // frozen: a sensor fault).
+        let mut rng = crate::testutil::Lcg::new(7);
+        let mut noisy = |t: f64, x: f32| {
+            let mut s = good_sample(t);
+            let mut jitter = |v: Option<f32>, sd: f64| v.map(|v| v + (sd * rng.gaussian()) as f32);
+            s.p_supply_bar = jitter(s.p_supply_bar, 0.05);
+            s.p_piston_bar = jitter(s.p_piston_bar, 0.05);
+            s.p_rod_bar = jitter(s.p_rod_bar, 0.05);
+            s.p_tank_bar = jitter(s.p_tank_bar, 0.02);
+            s.x_piston_m = jitter(Some(x), 2e-5);
+            s
+        };
+        for i in 0..3000 {
+            let status = m.step(&noisy(i as f64 * 1e-3, 0.04));
+            assert_eq!(status.faulted_channels, 0, "at sample {i}");
+        }
+        let before = learned(&m);
+        // The leak states learned something: their variance fell below
+        // the prior's a restart from scratch would give them.
+        let prior = sq(p.filter.leak_prior_lpm);
+        let external_var = before[3].1[4][4];
+        assert!(external_var < 0.5 * prior, "{external_var} vs {prior}");
+        // 2 s without samples.
+        let status = m.step(&noisy(5.0, 0.0401));
+        assert_ne!(status.health & health::DATA_GAP, 0);
+        assert_eq!(learned(&m), before);
+        let both = &m.filter_states().unwrap()[3];
+        let n = both.x.len();
+        assert!(
+            (both.x[0] - 0.0401 / X_REF).abs() < 1e-3,
+            "position restarted from the reading"
+        );
+        for j in 0..NX {
+            for i in 0..n {
+                if i != j {
+                    assert_eq!(both.p[j * n + i], 0.0, "P[{i},{j}]");
+                }
+            }
+        }
     }
 
     #[test]

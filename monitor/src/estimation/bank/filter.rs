@@ -64,6 +64,22 @@ impl<T: Real, const N: usize> HypothesisFilter<T, N> {
         }
     }
 
+    /// Restart the plant states at `s0` with their prior variances from
+    /// `p0_base`, keeping the nuisance and leak estimates and their
+    /// covariance: after a gap in the samples the plant moved on, its
+    /// valve and leaks did not. (The cross-covariances with the plant
+    /// states go: the restarted ones are independent readings.)
+    pub fn restart_plant(&mut self, s0: &[T; NX], p0_base: &[T; NB]) {
+        for i in 0..NX {
+            self.ekf.x[i] = s0[i];
+            for j in 0..N {
+                self.ekf.p[(i, j)] = T::ZERO;
+                self.ekf.p[(j, i)] = T::ZERO;
+            }
+            self.ekf.p[(i, i)] = p0_base[i];
+        }
+    }
+
     /// The valve nuisance estimates in the current state.
     pub fn nuisance(&self) -> Nuisance<T> {
         Nuisance {

@@ -252,6 +252,16 @@ impl<T: Real> Bank<T> {
         }
     }
 
+    /// Restart every filter's plant states at `s0`, keeping what each
+    /// has learned of the valve and the leaks
+    /// ([`HypothesisFilter::restart_plant`]).
+    pub fn restart_plant(&mut self, s0: &[T; NX], p0: &[T; NB]) {
+        self.healthy.restart_plant(s0, p0);
+        self.internal.restart_plant(s0, p0);
+        self.external.restart_plant(s0, p0);
+        self.both.restart_plant(s0, p0);
+    }
+
     /// Has the `both` filter learned its valve flow gains (extend,
     /// retract) to 1σ below `sd` (relative)?
     pub fn valve_gains_learned(&self, sd: f64) -> [bool; 2] {
