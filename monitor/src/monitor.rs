@@ -313,7 +313,8 @@ impl<T: Real> Monitor<T> {
         // opens the valve past the dead zone to feed the leak, and a
         // move's floor there would hide the leak it feeds.
         let speed_m_s = self.speed.update(T::from_f32(c.x_piston_m), T::c(dt));
-        let region = if speed_m_s.abs() < T::c(HOLD_SPEED_M_S) {
+        let at_rest = speed_m_s.abs() < T::c(HOLD_SPEED_M_S);
+        let region = if at_rest {
             HOLDING_REGION
         } else {
             command_region
@@ -420,6 +421,7 @@ impl<T: Real> Monitor<T> {
             valid: counts,
             observable: !pinned,
             region,
+            at_rest,
             t_s: sample.t_s,
             valve_gains_learned: bank.valve_gains_learned(GAIN_SETTLED_SD),
             u_valve,
