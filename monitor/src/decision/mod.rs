@@ -1398,14 +1398,20 @@ mod tests {
         assert_eq!(move_alarm_after_hold(&p, 1.0, 10.0 * level), None);
     }
 
-    #[test]
-    fn a_clear_hold_still_counts_after_the_filters_restart() {
+    /// A decision whose last hold (3 s at rest, reading nothing) read
+    /// the internal leak clear, its feed, and the alarm level, l/min.
+    fn after_a_clear_hold() -> (Decision<f64>, Feed, f64) {
         let p = Params::nominal();
-        let level = p.alarm.alarm_lpm;
         let mut d: Decision<f64> = Decision::new(&p);
         let mut feed = Feed::new();
         feed.run(&mut d, &outputs(0.0), 3.0, steady);
         assert!(d.hold_clear.internal());
+        (d, feed, p.alarm.alarm_lpm)
+    }
+
+    #[test]
+    fn a_clear_hold_still_counts_after_the_filters_restart() {
+        let (mut d, mut feed, level) = after_a_clear_hold();
         // A data gap in a slow move restarts the filters; the move's
         // reading after it is the valve model's error the hold before
         // read clear, not a leak that began in the gap.
@@ -1442,12 +1448,7 @@ mod tests {
 
     #[test]
     fn a_hold_its_region_blips_out_of_is_judged_on_its_whole_reading() {
-        let p = Params::nominal();
-        let level = p.alarm.alarm_lpm;
-        let mut d: Decision<f64> = Decision::new(&p);
-        let mut feed = Feed::new();
-        feed.run(&mut d, &outputs(0.0), 3.0, steady);
-        assert!(d.hold_clear.internal());
+        let (mut d, mut feed, level) = after_a_clear_hold();
         // A piston held with a command just past the dead zone: its speed
         // reading puts it in a move for 20 ms every 0.3 s. Each blip hands
         // the reading to `carried`, and no stretch of the hold reaches a
@@ -1463,18 +1464,13 @@ mod tests {
         feed.run(&mut d, &outputs(2.0 * level), 3.0, blipping);
         assert!(
             !d.hold_clear.internal(),
-            "the clearance from before the leak stands"
+            "the hold, counted through its blips, reads the leak"
         );
     }
 
     #[test]
     fn a_piston_creeping_with_its_command_in_the_hold_band_is_no_hold() {
-        let p = Params::nominal();
-        let level = p.alarm.alarm_lpm;
-        let mut d: Decision<f64> = Decision::new(&p);
-        let mut feed = Feed::new();
-        feed.run(&mut d, &outputs(0.0), 3.0, steady);
-        assert!(d.hold_clear.internal());
+        let (mut d, mut feed, level) = after_a_clear_hold();
         // The command sits on the hold band's edge while the piston creeps
         // (holding region, not at rest): the valve model's error at that
         // opening reads as a leak, and it is no hold's reading.
@@ -1491,12 +1487,7 @@ mod tests {
 
     #[test]
     fn a_slow_move_with_little_evidence_ends_the_hold_before_it() {
-        let p = Params::nominal();
-        let level = p.alarm.alarm_lpm;
-        let mut d: Decision<f64> = Decision::new(&p);
-        let mut feed = Feed::new();
-        feed.run(&mut d, &outputs(0.0), 3.0, steady);
-        assert!(d.hold_clear.internal());
+        let (mut d, mut feed, level) = after_a_clear_hold();
         // A real move, 1 s long, at weight 0.01: 10 ms of evidence, yet
         // no blip. The hold after it starts afresh and is judged only
         // after its own second of evidence.
