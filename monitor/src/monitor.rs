@@ -277,18 +277,7 @@ impl<T: Real> Monitor<T> {
         let bank = match self.bank.as_mut() {
             Some(bank) if !self.stale => bank,
             _ => {
-                let s0 = initial_state(&m, c.u_valve);
-                match self.bank.as_mut() {
-                    Some(stale) => stale.restart_plant(&s0, &self.cfg.p0),
-                    None => self.bank = Some(Bank::new(&s0, &self.cfg.p0, self.cfg.leak_prior_sd)),
-                }
-                self.stale = false;
-                self.since_start_s = 0.0;
-                self.warming = true;
-                self.decision.restart();
-                self.quiet.restart();
-                self.speed.restart();
-                self.matching.restart();
+                self.start_filters(&m, c.u_valve);
                 return self.status(
                     sample.t_s,
                     checked.faulted,
@@ -429,6 +418,25 @@ impl<T: Real> Monitor<T> {
         };
         flags |= self.decision.update(&ok, facts, &mut events);
         self.status(sample.t_s, checked.faulted, flags, events)
+    }
+
+    /// (Re)start the filters from the readings `m` and the command
+    /// `u_valve`: a new bank, or after a data gap the stale bank's plant
+    /// states only (what the filters learned stays); the warm-up and the
+    /// evidence start afresh.
+    fn start_filters(&mut self, m: &Measurement<T>, u_valve: f32) {
+        let s0 = initial_state(m, u_valve);
+        match self.bank.as_mut() {
+            Some(stale) => stale.restart_plant(&s0, &self.cfg.p0),
+            None => self.bank = Some(Bank::new(&s0, &self.cfg.p0, self.cfg.leak_prior_sd)),
+        }
+        self.stale = false;
+        self.since_start_s = 0.0;
+        self.warming = true;
+        self.decision.restart();
+        self.quiet.restart();
+        self.speed.restart();
+        self.matching.restart();
     }
 
     fn update_temperature(&mut self, temp: Option<f32>) {

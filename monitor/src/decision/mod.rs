@@ -18,11 +18,12 @@
 //!    excess does not count toward its alarm ([`HOLD_CLEAR_SHARE`]): a
 //!    reading that appears in a move right after a hold that read nothing
 //!    is more likely the valve model's error at that opening than a leak,
-//!    and a leak shows at the next hold (the piston at rest by its speed,
-//!    counted through blips too short to be a move). The same excess where the model
-//!    probabilities do not support the leak is a contradiction, counted
-//!    apart: reaching the debounce time it makes the verdict
-//!    `inconclusive` ([`Decision::conclusive`]), never `healthy`. Raised
+//!    and a leak shows at the next hold (the piston at rest by its
+//!    speed, counted through blips too short to be a move). The same
+//!    excess where the model probabilities do not support the leak is a
+//!    contradiction, counted apart: reaching the debounce time it makes
+//!    the verdict `inconclusive` ([`Decision::conclusive`]), never
+//!    `healthy`. Raised
 //!    leaks go to the one leak-alarm latch ([`latch`]): they stay until
 //!    acknowledged, and a new leak while one is latched escalates
 //!    (internal + external = both); with one leak raised, the other must
