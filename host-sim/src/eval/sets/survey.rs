@@ -42,6 +42,7 @@ const SURVEYS: &[SurveyFacts] = &[
     later("sixteenth", "at the start of the fourth session of 2026-12-07"),
     later("seventeenth", "at the start of the fifth session of 2026-12-07"),
     later("eighteenth", "at the start of the sixth session of 2026-12-07"),
+    later("nineteenth", "at the start of the seventh session of 2026-12-07"),
 ];
 
 /// Rigs in a survey.
@@ -202,6 +203,7 @@ mod tests {
             (16, "survey16", "Sixteenth survey development rigs", "A sixteenth survey sample (seeds 751–798), first run untuned at the start of the fourth session of 2026-12-07 (use with `--quick`)"),
             (17, "survey17", "Seventeenth survey development rigs", "A seventeenth survey sample (seeds 799–846), first run untuned at the start of the fifth session of 2026-12-07 (use with `--quick`)"),
             (18, "survey18", "Eighteenth survey development rigs", "An eighteenth survey sample (seeds 847–894), first run untuned at the start of the sixth session of 2026-12-07 (use with `--quick`)"),
+            (19, "survey19", "Nineteenth survey development rigs", "A nineteenth survey sample (seeds 895–942), first run untuned at the start of the seventh session of 2026-12-07 (use with `--quick`)"),
         ];
         for (n, name, title, about) in expected {
             let s = RigSet::survey(n);
