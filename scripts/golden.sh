@@ -15,9 +15,8 @@ cargo build --release -p host-sim
 hs=target/release/host-sim
 mkdir -p "$dir"
 rm -f "$dir"/*.input.bin "$dir"/*.expected.bin
-# Healthy: 5 s (4 s past warm-up: `healthy` waits for the first judged
-# hold, and the on-target tests inject a fault after it): no alarm.
-"$hs" golden write examples/healthy.csv.gz --samples 5000 --warm-up 1 -o "$dir/healthy"
+# Healthy: 3 s (2 s past warm-up): no alarm.
+"$hs" golden write examples/healthy.csv.gz --samples 3000 --warm-up 1 -o "$dir/healthy"
 # Internal + external leak: 8 s: external alarm at 1.2 s, both at 1.3 s.
 "$hs" golden write examples/both.csv.gz --samples 8000 --warm-up 1 -o "$dir/both"
 "$hs" golden check "$dir"

@@ -21,9 +21,10 @@
 //!    and a leak shows at the next hold (the piston at rest by its
 //!    speed, counted through blips too short to be a move). Until the
 //!    first hold has been judged the clearance is assumed: a move raises
-//!    nothing, a hold too short to judge can still read the leak and end
-//!    the assumption for it, and after [`ASSUMED_CLEAR_MAX_S`] of
-//!    evidence without a judged hold it ends anyway. The same
+//!    nothing, but what it holds back is pending (never `healthy`), a
+//!    hold too short to judge can still read the leak and end the
+//!    assumption for it, and after [`ASSUMED_CLEAR_MAX_S`] of evidence
+//!    without a judged hold it ends anyway. The same
 //!    excess where the model probabilities do not support the leak is a
 //!    contradiction, counted apart: reaching the debounce time it makes
 //!    the verdict `inconclusive` ([`Decision::conclusive`]), never
@@ -65,12 +66,11 @@
 //!    reset within the warm-up time, a model that fits (mean NIS of
 //!    the best filter below [`MISMATCH_NIS`], and no leak reading the
 //!    probabilities contradict), no leak reading pending (its CUSUM,
-//!    or its contradiction count, above 0: the alarm is still waiting on
-//!    it), and no reported leak size at or above its alarm level (the
-//!    monitor cannot tell then, however wide the σ that keeps the alarm
-//!    back), and a hold that has been judged (a clearance only assumed
-//!    is no evidence). Without that the verdict is
-//!    `inconclusive` ([`Decision::conclusive`]). A sample at which the
+//!    its contradiction count, or the excess a clearance only assumed
+//!    holds back, above 0: the alarm is still waiting on it), and no
+//!    reported leak size at or above its alarm level (the monitor cannot
+//!    tell then, however wide the σ that keeps the alarm back). Without
+//!    that the verdict is `inconclusive` ([`Decision::conclusive`]). A sample at which the
 //!    `both` filter holds valve flow gains beyond [`VALVE_GAIN_MISFIT`]
 //!    counts as no evidence at all: the valve model does not describe the
 //!    installation there — unless that direction's gain had been learned
@@ -289,9 +289,12 @@ pub struct Decision<T> {
     /// [`HOLD_CLEAR_SHARE`] of its level): a move's reading then does not
     /// raise it.
     hold_clear: PerLeak<bool>,
-    /// No hold has been judged yet: `hold_clear` is assumed, not read,
-    /// and `healthy` is withheld.
+    /// No hold has been judged yet: `hold_clear` is assumed, not read.
     clear_assumed: bool,
+    /// Per leak, the CUSUM of a move's excess the assumed clearance
+    /// holds back, s of evidence: the verdict waits on it like on the
+    /// alarm's own (never `healthy` on a clearance nobody measured).
+    held_back: PerLeak<T>,
     /// The leak-free installation's holding command and how far it may
     /// move (normalised; tolerance 0: not followed).
     hold_ref: T,
@@ -416,6 +419,7 @@ impl<T: Real> Decision<T> {
             // after a clear hold (eighteenth survey rigs 864 and 890).
             hold_clear: PerLeak::splat(true),
             clear_assumed: true,
+            held_back: PerLeak::splat(T::ZERO),
             raised: PerLeak::splat(false),
             unsupported: PerLeak::splat(T::ZERO),
             backed: PerLeak::splat(true),
@@ -473,6 +477,7 @@ impl<T: Real> Decision<T> {
         self.slow = PerLeak::splat(T::ZERO);
         self.slow_sd = PerLeak::splat(T::ZERO);
         self.persist = PerLeak::splat(T::ZERO);
+        self.held_back = PerLeak::splat(T::ZERO);
         self.hold_ev_s = T::ZERO;
         self.move_s = T::ZERO;
         // What the last hold read stays: the plant's leaks did not change
@@ -506,7 +511,6 @@ impl<T: Real> Decision<T> {
             && !self.pending()
             && !self.reports_a_leak()
             && !self.hold_shifted()
-            && !self.clear_assumed
     }
 
     /// Does the loop hold the piston at a command away from the leak-free
@@ -591,9 +595,11 @@ impl<T: Real> Decision<T> {
     /// debounce time it is no contradiction yet, and no evidence of
     /// health either.
     fn pending(&self) -> bool {
-        Leak::ALL
-            .iter()
-            .any(|&k| self.persist[k] > T::ZERO || self.unsupported[k] > T::ZERO)
+        Leak::ALL.iter().any(|&k| {
+            self.persist[k] > T::ZERO
+                || self.unsupported[k] > T::ZERO
+                || self.held_back[k] > T::ZERO
+        })
     }
 
     /// Does the monitor report a leak size at or above its alarm level?
@@ -819,8 +825,16 @@ impl<T: Real> Decision<T> {
             } else {
                 (-T::ONE, excess)
             };
-            // A move does not raise what the last hold read clear.
-            if region != HOLDING_REGION && self.hold_clear[k] {
+            // A move does not raise what the last hold read clear; what
+            // a clearance only assumed holds back is still pending.
+            let held = region != HOLDING_REGION && self.hold_clear[k];
+            let held_back = if held && self.clear_assumed {
+                alarm
+            } else {
+                -T::ONE
+            };
+            self.held_back[k] = (self.held_back[k] + held_back * dt_w).clamp_to(T::ZERO, cap);
+            if held {
                 alarm = alarm.min(T::ZERO);
             }
             self.unsupported[k] = (self.unsupported[k] + against * dt_w).clamp_to(T::ZERO, cap);
@@ -870,6 +884,7 @@ impl<T: Real> Decision<T> {
                     self.fast_lower[k] < T::c(HOLD_CLEAR_SHARE) * self.level_now[k];
             }
             self.clear_assumed = false;
+            self.held_back = PerLeak::splat(T::ZERO);
         } else if self.clear_assumed && self.evidence_s >= T::c(ASSUMED_CLEAR_SETTLE_S) {
             // Too short to clear a leak, long enough to read one: its
             // own reading over the mark ends the assumption for that leak
@@ -878,6 +893,7 @@ impl<T: Real> Decision<T> {
             for k in Leak::ALL {
                 if self.own_reading(k) >= T::c(HOLD_CLEAR_SHARE) * self.level_now[k] {
                     self.hold_clear[k] = false;
+                    self.held_back[k] = T::ZERO;
                 }
             }
         }
@@ -889,6 +905,7 @@ impl<T: Real> Decision<T> {
         if self.clear_assumed && self.evidence_s >= T::c(ASSUMED_CLEAR_MAX_S) {
             self.hold_clear = PerLeak::splat(false);
             self.clear_assumed = false;
+            self.held_back = PerLeak::splat(T::ZERO);
         }
     }
 
@@ -1475,19 +1492,24 @@ mod tests {
     }
 
     #[test]
-    fn a_clearance_no_hold_has_judged_is_no_healthy() {
+    fn a_moves_reading_a_clearance_only_assumed_holds_back_is_never_healthy() {
         let p = Params::nominal();
+        let level = p.alarm.alarm_lpm;
         let mut d: Decision<f64> = Decision::new(&p);
         let mut feed = Feed::new();
         let retracting = |t| facts(0.001, 1.0, true, 0, t);
-        // Moves that read nothing: clean, but no hold has said so.
-        feed.run(&mut d, &outputs(0.0), 10.0, retracting);
-        assert!(!d.conclusive());
-        // A hold with its second of evidence, reading nothing: healthy.
-        feed.run(&mut d, &outputs(0.0), 1.5, steady);
+        // Moves that read nothing are evidence of health as ever.
+        feed.run(&mut d, &outputs(0.0), 5.0, retracting);
         assert!(d.conclusive());
-        // And after it, a clean move is too.
-        feed.run(&mut d, &outputs(0.0), 2.0, retracting);
+        // One that reads three times the level is held back, not
+        // cleared: nobody measured the clearance that holds it.
+        // (Half a second: the reported size stays under the level.)
+        feed.run(&mut d, &outputs(3.0 * level), 0.5, retracting);
+        assert!(d.latched().is_empty());
+        assert!(!d.conclusive());
+        // A hold that reads nothing judges it: healthy again, once the
+        // reported size has come down from the move's reading.
+        feed.run(&mut d, &outputs(0.0), 10.0, steady);
         assert!(d.conclusive());
     }
 
@@ -1526,13 +1548,17 @@ mod tests {
         let mut d: Decision<f64> = Decision::new(&p);
         let mut feed = Feed::new();
         let retracting = |t| facts(0.001, 1.0, true, 0, t);
-        // A machine that never holds still: judged on its moves once
-        // the assumption has had its time.
-        feed.run(&mut d, &outputs(0.0), ASSUMED_CLEAR_MAX_S - 1.0, retracting);
+        // A machine that never holds still: its moves' reading is held
+        // back until the assumption has had its time, then raised.
+        feed.run(
+            &mut d,
+            &outputs(3.0 * level),
+            ASSUMED_CLEAR_MAX_S - 1.0,
+            retracting,
+        );
+        assert!(d.latched().is_empty());
         assert!(!d.conclusive());
-        feed.run(&mut d, &outputs(0.0), 2.0, retracting);
-        assert!(d.conclusive());
-        feed.run(&mut d, &outputs(3.0 * level), 5.0, retracting);
+        feed.run(&mut d, &outputs(3.0 * level), 2.0, retracting);
         assert!(d.latched().contains(Leak::Internal));
     }
 
