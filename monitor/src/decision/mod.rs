@@ -24,11 +24,10 @@
 //!    nothing, but what it holds back is pending (never `healthy`), a
 //!    hold too short to judge can still read the leak and end the
 //!    assumption for it, and after [`ASSUMED_CLEAR_MAX_S`] of evidence
-//!    without a judged hold it ends anyway. The same
-//!    excess where the model probabilities do not support the leak is a
-//!    contradiction, counted apart: reaching the debounce time it makes
-//!    the verdict `inconclusive` ([`Decision::conclusive`]), never
-//!    `healthy`. Raised
+//!    without a judged hold it ends anyway. The same excess where the
+//!    model probabilities do not support the leak is a contradiction,
+//!    counted apart: reaching the debounce time it makes the verdict
+//!    `inconclusive` ([`Decision::conclusive`]), never `healthy`. Raised
 //!    leaks go to the one leak-alarm latch ([`latch`]): they stay until
 //!    acknowledged, and a new leak while one is latched escalates
 //!    (internal + external = both); with one leak raised, the other must
@@ -70,12 +69,13 @@
 //!    holds back, above 0: the alarm is still waiting on it), and no
 //!    reported leak size at or above its alarm level (the monitor cannot
 //!    tell then, however wide the σ that keeps the alarm back). Without
-//!    that the verdict is `inconclusive` ([`Decision::conclusive`]). A sample at which the
-//!    `both` filter holds valve flow gains beyond [`VALVE_GAIN_MISFIT`]
-//!    counts as no evidence at all: the valve model does not describe the
-//!    installation there — unless that direction's gain had been learned
-//!    within the limit first (1σ below [`GAIN_SETTLED_SD`]): a valve does
-//!    not change its gain in seconds, a leak the gains took in first does.
+//!    that the verdict is `inconclusive` ([`Decision::conclusive`]). A
+//!    sample at which the `both` filter holds valve flow gains beyond
+//!    [`VALVE_GAIN_MISFIT`] counts as no evidence at all: the valve model
+//!    does not describe the installation there — unless that direction's
+//!    gain had been learned within the limit first (1σ below
+//!    [`GAIN_SETTLED_SD`]): a valve does not change its gain in seconds, a
+//!    leak the gains took in first does.
 //!
 //! The leak flows are the `both` filter's coefficients less the
 //! installation's healthy baseline for the current operating region
@@ -828,12 +828,11 @@ impl<T: Real> Decision<T> {
             // A move does not raise what the last hold read clear; what
             // a clearance only assumed holds back is still pending.
             let held = region != HOLDING_REGION && self.hold_clear[k];
-            let held_back = if held && self.clear_assumed {
-                alarm
-            } else {
-                -T::ONE
-            };
-            self.held_back[k] = (self.held_back[k] + held_back * dt_w).clamp_to(T::ZERO, cap);
+            // (Once the assumption has ended `held_back` is 0 and stays.)
+            if self.clear_assumed {
+                let held_back = if held { alarm } else { -T::ONE };
+                self.held_back[k] = (self.held_back[k] + held_back * dt_w).clamp_to(T::ZERO, cap);
+            }
             if held {
                 alarm = alarm.min(T::ZERO);
             }
@@ -883,8 +882,7 @@ impl<T: Real> Decision<T> {
                 self.hold_clear[k] =
                     self.fast_lower[k] < T::c(HOLD_CLEAR_SHARE) * self.level_now[k];
             }
-            self.clear_assumed = false;
-            self.held_back = PerLeak::splat(T::ZERO);
+            self.end_assumed_clearance();
         } else if self.clear_assumed && self.evidence_s >= T::c(ASSUMED_CLEAR_SETTLE_S) {
             // Too short to clear a leak, long enough to read one: its
             // own reading over the mark ends the assumption for that leak
@@ -904,9 +902,15 @@ impl<T: Real> Decision<T> {
     fn expire_assumed_clearance(&mut self) {
         if self.clear_assumed && self.evidence_s >= T::c(ASSUMED_CLEAR_MAX_S) {
             self.hold_clear = PerLeak::splat(false);
-            self.clear_assumed = false;
-            self.held_back = PerLeak::splat(T::ZERO);
+            self.end_assumed_clearance();
         }
+    }
+
+    /// The clearance is read (or given up) from now on: nothing is held
+    /// back on an assumption any more.
+    fn end_assumed_clearance(&mut self) {
+        self.clear_assumed = false;
+        self.held_back = PerLeak::splat(T::ZERO);
     }
 
     /// Each leak against its own warning level in `region`, with
