@@ -1208,6 +1208,18 @@ mod tests {
         facts(0.001, 1.0, true, 1, t)
     }
 
+    /// A quasi-steady (weight 1), valid sample of a slow retraction.
+    fn retracting(t: f64) -> SampleFacts<f64> {
+        facts(0.001, 1.0, true, 0, t)
+    }
+
+    /// A fresh decision (no hold judged yet), its feed, and the alarm
+    /// level, l/min.
+    fn fresh() -> (Decision<f64>, Feed, f64) {
+        let p = Params::nominal();
+        (Decision::new(&p), Feed::new(), p.alarm.alarm_lpm)
+    }
+
     /// Seconds until the internal leak is raised, reading `lpm` steadily
     /// in `region` (None: not within 10 s).
     fn time_to_alarm(p: &Params, lpm: f64, region: usize) -> Option<f64> {
@@ -1481,13 +1493,9 @@ mod tests {
 
     #[test]
     fn a_move_before_any_judged_hold_raises_nothing_until_a_hold_reads_the_leak() {
-        let p = Params::nominal();
-        let level = p.alarm.alarm_lpm;
-        let mut d: Decision<f64> = Decision::new(&p);
-        let mut feed = Feed::new();
+        let (mut d, mut feed, level) = fresh();
         // The first slow retraction after the warm-up reads three times
         // the level: the valve model's error as likely as a leak.
-        let retracting = |t| facts(0.001, 1.0, true, 0, t);
         feed.run(&mut d, &outputs(3.0 * level), 5.0, retracting);
         assert!(d.latched().is_empty(), "{:?}", d.latched());
         // The first hold reads it too: raised there.
@@ -1497,11 +1505,7 @@ mod tests {
 
     #[test]
     fn a_moves_reading_a_clearance_only_assumed_holds_back_is_never_healthy() {
-        let p = Params::nominal();
-        let level = p.alarm.alarm_lpm;
-        let mut d: Decision<f64> = Decision::new(&p);
-        let mut feed = Feed::new();
-        let retracting = |t| facts(0.001, 1.0, true, 0, t);
+        let (mut d, mut feed, level) = fresh();
         // Moves that read nothing are evidence of health as ever.
         feed.run(&mut d, &outputs(0.0), 5.0, retracting);
         assert!(d.conclusive());
@@ -1521,10 +1525,7 @@ mod tests {
     /// moves, a 0.5 s hold reading `hold_lpm` of internal leak and a 5 s
     /// move reading `move_lpm`.
     fn after_a_short_first_hold(warm_s: f64, hold_lpm: f64, move_lpm: f64) -> LeakSet {
-        let p = Params::nominal();
-        let mut d: Decision<f64> = Decision::new(&p);
-        let mut feed = Feed::new();
-        let retracting = |t| facts(0.001, 1.0, true, 0, t);
+        let (mut d, mut feed, _) = fresh();
         feed.run(&mut d, &outputs(0.0), warm_s, retracting);
         feed.run(&mut d, &outputs(hold_lpm), 0.5, steady);
         assert!(d.latched().is_empty(), "a short hold raises nothing");
@@ -1547,11 +1548,7 @@ mod tests {
 
     #[test]
     fn a_clearance_no_hold_judges_ends_after_its_evidence_time() {
-        let p = Params::nominal();
-        let level = p.alarm.alarm_lpm;
-        let mut d: Decision<f64> = Decision::new(&p);
-        let mut feed = Feed::new();
-        let retracting = |t| facts(0.001, 1.0, true, 0, t);
+        let (mut d, mut feed, level) = fresh();
         // A machine that never holds still: its moves' reading is held
         // back until the assumption has had its time, then raised.
         feed.run(
@@ -1584,7 +1581,6 @@ mod tests {
         // reading after it is the valve model's error the hold before
         // read clear, not a leak that began in the gap.
         d.restart();
-        let retracting = |t| facts(0.001, 1.0, true, 0, t);
         feed.run(&mut d, &outputs(3.0 * level), 8.0, retracting);
         assert!(d.latched().is_empty(), "{:?}", d.latched());
         // A leak it is: the next hold raises it.
@@ -1598,7 +1594,6 @@ mod tests {
         let level = p.alarm.alarm_lpm;
         let mut d = decision(&p);
         let mut feed = Feed::new();
-        let retracting = |t| facts(0.001, 1.0, true, 0, t);
         feed.run(&mut d, &outputs(0.0), 3.0, steady);
         // A slow retraction reading three times the level, then a hold
         // reading nothing: the move's reading was no leak.
